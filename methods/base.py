@@ -1,0 +1,85 @@
+"""The method and modifier records: self-describing, with a parameter schema.
+
+``gnibench list methods``, the spec parser, the structure checks and the registry-wide tests are all
+driven by these records. Each record also carries ``generate(ctx) -> str``: the numba source of its
+``make_ws()`` and ``step(y, h, par, ws) -> (y1, nfev, njev, status)`` for one cell (see
+:mod:`suite.codegen`).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+from suite.errors import UserError
+from suite.params import Param
+
+H_PARAM = Param("h", 0.01, "step size", low=0.0, low_open=True)
+NEWTON_PARAMS = (
+    Param("newton_maxit", 50, "maximum Newton iterations per step", kind="int", low=1, high=1000),
+)
+
+
+@dataclass(frozen=True)
+class Method:
+    """A base integrator.
+
+    ``needs`` lists the problem structure the method requires: ``partition`` (two blocks u, v as in
+    [HLW] (1.8)). ``symplectic`` means symplectic for Hamiltonian problems in canonical partition.
+    """
+
+    id: str
+    family: str
+    order: int
+    reference: str
+    doc: str
+    generate: Callable[[Any], str]
+    params: tuple[Param, ...] = (H_PARAM,)
+    implicit: bool = False
+    symplectic: bool = False
+    symmetric: bool = False
+    needs: tuple[str, ...] = ()
+    explicit_when: str = ""          # e.g. "separable": explicit for problems with that structure
+    data: Any = None
+    aliases: tuple[str, ...] = field(default=())
+
+    def check_structure(self, problem, has_modifiers: bool) -> None:
+        """Refuse, with a clear error, a problem that lacks the structure this method needs."""
+        if "partition" in self.needs and problem.partition is None:
+            raise UserError(
+                f"method {self.id} needs a partitioned system (blocks u, v; [HLW] (1.8)), "
+                f"but problem {problem.id} declares no partition; use a method that does not need one")
+
+    def describe(self) -> dict:
+        return {
+            "id": self.id, "family": self.family, "order": self.order, "reference": self.reference,
+            "doc": self.doc,
+            "properties": {"implicit": self.implicit,
+                           "explicit": (f"when {self.explicit_when}" if self.explicit_when
+                                        else not self.implicit),
+                           "symplectic": self.symplectic, "symmetric": self.symmetric,
+                           "needs_partition": "partition" in self.needs},
+            "params": [p.describe() for p in self.params],
+        }
+
+
+@dataclass(frozen=True)
+class Modifier:
+    """A vector-field modifier (observer, penalty): adds a term to F that any method then integrates.
+
+    ``resolve(values, problem)`` fills in defaults that depend on the problem (the observed integrals)
+    and checks them; ``generate(ctx, index, offset)`` returns the source of ``<name>_term(y, par)`` and
+    ``<name>_jac(y, par, J)``; ``runtime(values, h0)`` the numbers it reads from ``par``.
+    """
+
+    id: str
+    reference: str
+    doc: str
+    params: tuple[Param, ...]
+    resolve: Callable
+    generate: Callable
+    runtime: Callable
+    runtime_size: Callable
+
+    def describe(self) -> dict:
+        return {"id": self.id, "reference": self.reference, "doc": self.doc, "kind": "modifier",
+                "params": [p.describe() for p in self.params]}

@@ -1,0 +1,55 @@
+"""Implicit Runge-Kutta methods: tableaus as data, one Newton kernel for the family.
+
+Stages are solved by full Newton with the field's Jacobian to round-off (methods/kernels/irk.py).
+A step that does not converge in ``newton_maxit`` iterations ends the run with status
+``newton_failed``.
+"""
+from __future__ import annotations
+
+from fractions import Fraction as Fr
+
+from methods.base import H_PARAM, NEWTON_PARAMS, Method
+from methods.kernels import irk
+from methods.tableau import Tableau, lit, tableau
+from suite.codegen import template
+
+IMPLICIT_EULER = tableau([[1]], [1], [1], order=1)                      # [HLW] (1.6)
+IMPLICIT_MIDPOINT = tableau([["1/2"]], [1], ["1/2"], order=2)           # [HLW] (1.7)
+
+
+def _d_coefficients(tab: Tableau) -> tuple[Fr, ...]:
+    """d = b^T A^{-1}, exactly (Gauss-Jordan on A^T d = b in rationals), so y1 = y + sum_j d_j Z_j."""
+    s = tab.stages
+    rows = [[Fr(tab.a[j][i]) for j in range(s)] + [Fr(tab.b[i])] for i in range(s)]
+    for k in range(s):
+        p = next(i for i in range(k, s) if rows[i][k] != 0)
+        rows[k], rows[p] = rows[p], rows[k]
+        rows[k] = [x / rows[k][k] for x in rows[k]]
+        for i in range(s):
+            if i != k and rows[i][k] != 0:
+                rows[i] = [x - rows[i][k] * y for x, y in zip(rows[i], rows[k])]
+    return tuple(rows[i][s] for i in range(s))
+
+
+def generate_irk(tab: Tableau):
+    d = _d_coefficients(tab)
+
+    def generate(ctx) -> str:
+        consts = [f"S = {tab.stages}",
+                  "A = (" + ", ".join("(" + ", ".join(lit(x) for x in row) + ",)"
+                                      for row in tab.a) + ",)",
+                  "D = (" + ", ".join(lit(x) for x in d) + ",)"]
+        return "\n" + "\n".join(consts) + "\n" + template(irk.make_ws) + template(irk.step)
+
+    return generate
+
+
+def irk_method(id, tab, reference, doc, **props):
+    return Method(id=id, family="implicit-rk", order=tab.order, reference=reference, doc=doc,
+                  generate=generate_irk(tab), data=tab, implicit=True,
+                  params=(H_PARAM,) + NEWTON_PARAMS, **props)
+
+
+implicit_euler = irk_method("implicit-euler", IMPLICIT_EULER, "[HLW] (1.6)", "implicit Euler method")
+implicit_midpoint = irk_method("implicit-midpoint", IMPLICIT_MIDPOINT, "[HLW] (1.7)",
+                               "implicit midpoint rule", symplectic=True, symmetric=True)

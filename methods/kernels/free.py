@@ -1,0 +1,17 @@
+"""Placeholders for the names a kernel template leaves free (bound in each generated module).
+
+N: state dimension; f(y, par) -> tuple: the (possibly modified) vector field; fjac(y, par, J): its
+Jacobian into an N x N array; to_tuple(a), shifted(y, Z, j), store(t, A, j): tuple/array helpers.
+"""
+
+
+def _unbound(*args):  # pragma: no cover - only reached if a template is called un-generated
+    raise RuntimeError("kernel template called outside a generated module")
+
+
+N = S = NI = NE = NEWTON_MAXIT = 0
+A = C = D = I_IDX = E_IDX = ()
+EXPLICIT = False
+f = fjac = to_tuple = shifted = store = _unbound
+lu_solve = newton_done = _unbound
+invariants = make_ws = step = _unbound

@@ -1,0 +1,70 @@
+"""Generic implicit Runge-Kutta step (template): Newton on the stage increments.
+
+Stage increments Z_i = Y_i - y solve Z_i = h sum_j a_ij f(y + Z_j); the new point is
+y1 = y + sum_j d_j Z_j with d = b^T A^{-1} (no extra f-evaluation). Newton uses the Jacobian of f
+at the current iterate (full Newton), so it converges quadratically to round-off.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from methods.kernels.free import (A, D, N, NEWTON_MAXIT, S, f, fjac, lu_solve, newton_done,  # noqa: F401
+                                  shifted, store, to_tuple)
+
+
+def make_ws():
+    return (np.zeros((S, N)), np.empty((S, N)), np.empty((S * N, S * N)), np.empty(S * N),
+            np.empty((N, N)), np.empty(S * N, dtype=np.int64), np.empty(N))
+
+
+def step(y, h, par, ws):
+    Z, F, M, r, J, piv, out = ws
+    scale = 1.0
+    for i in range(N):
+        scale = max(scale, abs(y[i]))
+        for j in range(S):
+            Z[j, i] = 0.0
+    nfev = 0.0
+    njev = 0.0
+    prev = np.inf
+    for it in range(NEWTON_MAXIT + 1):
+        if it == NEWTON_MAXIT:
+            return y, nfev, njev, 2
+        for j in range(S):
+            Yj = shifted(y, Z, j)
+            store(f(Yj, par), F, j)
+            fjac(Yj, par, J)
+            for a in range(S):
+                c = -h * A[a][j]
+                for i in range(N):
+                    for k in range(N):
+                        M[a * N + i, j * N + k] = c * J[i, k]
+                if a == j:
+                    for i in range(N):
+                        M[a * N + i, j * N + i] += 1.0
+        nfev += S
+        njev += S
+        for a in range(S):
+            for i in range(N):
+                acc = 0.0
+                for j in range(S):
+                    acc += A[a][j] * F[j, i]
+                r[a * N + i] = h * acc - Z[a, i]
+        if not lu_solve(M, r, S * N, piv):
+            return y, nfev, njev, 2
+        dnorm = 0.0
+        for a in range(S):
+            for i in range(N):
+                Z[a, i] += r[a * N + i]
+                dnorm = max(dnorm, abs(r[a * N + i]))
+        if not dnorm < np.inf:
+            return y, nfev, njev, 2
+        if newton_done(dnorm, prev, scale):
+            break
+        prev = dnorm
+    for i in range(N):
+        acc = 0.0
+        for j in range(S):
+            acc += D[j] * Z[j, i]
+        out[i] = y[i] + acc
+    return to_tuple(out), nfev, njev, 0

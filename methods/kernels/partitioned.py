@@ -1,0 +1,59 @@
+"""Partitioned Euler step (template), implicit in block I and explicit in block E, [HLW] (1.9).
+
+w1 = w0 + h g_I(w1, e0),  e1 = e0 + h g_E(w1, e0). With I = u this is symplectic Euler, with I = v
+its adjoint. Used when block I cannot be updated explicitly (otherwise the generator writes a
+straight tuple update). Evaluating only one block of f counts as half an f-evaluation.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from methods.kernels.free import (E_IDX, I_IDX, N, NE, NEWTON_MAXIT, NI, f, fjac,  # noqa: F401
+                                  lu_solve, newton_done, to_tuple)
+
+
+def make_ws_X():
+    return (np.empty((N, N)), np.empty((NI, NI)), np.empty(NI), np.empty(NI, dtype=np.int64),
+            np.empty(N))
+
+
+def step_X(y, h, par, ws):
+    J, M, r, piv, ya = ws
+    scale = 1.0
+    for i in range(N):
+        ya[i] = y[i]
+        scale = max(scale, abs(y[i]))
+    nfev = 0.0
+    njev = 0.0
+    prev = np.inf
+    for it in range(NEWTON_MAXIT + 1):
+        if it == NEWTON_MAXIT:
+            return y, nfev, njev, 2
+        Y = to_tuple(ya)
+        g = f(Y, par)
+        fjac(Y, par, J)
+        nfev += 0.5
+        njev += 1.0
+        for k in range(NI):
+            i = I_IDX[k]
+            r[k] = y[i] + h * g[i] - ya[i]
+            for m in range(NI):
+                M[k, m] = -h * J[i, I_IDX[m]]
+            M[k, k] += 1.0
+        if not lu_solve(M, r, NI, piv):
+            return y, nfev, njev, 2
+        dnorm = 0.0
+        for k in range(NI):
+            ya[I_IDX[k]] += r[k]
+            dnorm = max(dnorm, abs(r[k]))
+        if not dnorm < np.inf:
+            return y, nfev, njev, 2
+        if newton_done(dnorm, prev, scale):
+            break
+        prev = dnorm
+    g = f(to_tuple(ya), par)
+    nfev += 0.5
+    for k in range(NE):
+        i = E_IDX[k]
+        ya[i] = y[i] + h * g[i]
+    return to_tuple(ya), nfev, njev, 0

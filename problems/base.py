@@ -1,0 +1,115 @@
+"""The problem record: one definition per problem, from which everything else is derived.
+
+A problem module defines a :class:`Problem` whose ``model`` builds sympy expressions: either a
+Hamiltonian in canonical variables ([HLW] (1.10): p' = -H_q, q' = H_p) or an explicit right-hand
+side, plus its named first integrals. From that single source :mod:`problems.codegen` derives the
+compiled vector field, its Jacobian, the integrals and their gradients D_H, and the partition
+structure. Exact solutions, where known, are plain numpy functions of the same record.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+from suite.errors import UserError
+from suite.params import Param
+
+
+@dataclass(frozen=True)
+class Model:
+    """What ``Problem.model`` returns: a Hamiltonian or a right-hand side, and the integrals."""
+
+    integrals: dict[str, Any]
+    hamiltonian: Any = None
+    rhs: tuple | None = None
+
+
+@dataclass(frozen=True)
+class Problem:
+    """A self-describing problem record.
+
+    Parameters
+    ----------
+    id, title, reference:
+        Public id, one-line title and place in the seeds.
+    state:
+        Names of the state components, in order.
+    params:
+        Model parameters (numbers passed to the compiled code at run time, in this order).
+    model:
+        ``model(S)`` with ``S.<name>`` the sympy symbol of every state component and parameter;
+        returns a :class:`Model`.
+    initial:
+        ``initial(values) -> tuple`` default initial point from the parameter values.
+    canonical:
+        ``(p names, q names)`` when ``model`` gives a Hamiltonian.
+    partition:
+        ``(u names, v names)`` for partitioned methods ([HLW] (1.8)); defaults to ``canonical``.
+    exact:
+        ``exact(t, y0, values) -> array (len(t), N)``, the exact solution, or None.
+    notes:
+        Choices made where the seeds are silent (also shown by ``gnibench list``).
+    """
+
+    id: str
+    title: str
+    reference: str
+    state: tuple[str, ...]
+    params: tuple[Param, ...]
+    model: Callable[[Any], Model]
+    initial: Callable[[dict], tuple]
+    canonical: tuple[tuple[str, ...], tuple[str, ...]] | None = None
+    partition: tuple[tuple[str, ...], tuple[str, ...]] | None = None
+    exact: Callable | None = None
+    notes: str = ""
+    model_params: tuple[str, ...] = field(default=())
+
+    def __post_init__(self):
+        if self.partition is None and self.canonical is not None:
+            object.__setattr__(self, "partition", self.canonical)
+        if self.partition is not None:
+            u, v = self.partition
+            if sorted(u + v) != sorted(self.state):
+                raise ValueError(f"{self.id}: partition {self.partition} does not cover {self.state}")
+        # Model parameters are the declared ones; initial-value options are appended as <name>0.
+        object.__setattr__(self, "model_params", tuple(p.name for p in self.params))
+        inits = tuple(Param(f"{s}0", None, f"initial value of {s} (default: catalog value)")
+                      for s in self.state)
+        object.__setattr__(self, "params", self.params + inits)
+
+    @property
+    def dim(self) -> int:
+        return len(self.state)
+
+    def validate(self, values: dict) -> None:
+        """Hook for cross-parameter checks; raise UserError. Default: none."""
+
+    def par(self, values: dict) -> tuple[float, ...]:
+        """The run-time parameter tuple for the compiled code (model parameters, in order)."""
+        return tuple(float(values[n]) for n in self.model_params)
+
+    def y0(self, values: dict) -> tuple[float, ...]:
+        """Initial point: the catalog default, with any ``<name>0`` option overriding it."""
+        base = tuple(float(x) for x in self.initial(values))
+        out = tuple(values.get(f"{s}0") if values.get(f"{s}0") is not None else b
+                    for s, b in zip(self.state, base))
+        return out
+
+    def describe(self) -> dict:
+        from problems.codegen import problem_meta
+
+        meta = problem_meta(self)
+        return {
+            "id": self.id, "title": self.title, "reference": self.reference,
+            "state": list(self.state), "integrals": meta["integrals"],
+            "partition": [list(b) for b in self.partition] if self.partition else None,
+            "separable": meta["explicit_u"] and meta["explicit_v"] if self.partition else False,
+            "exact_solution": self.exact is not None,
+            "params": [p.describe() for p in self.params], "notes": self.notes,
+        }
+
+
+def require(cond: bool, message: str) -> None:
+    """Raise a UserError unless cond holds (for Problem.validate hooks)."""
+    if not cond:
+        raise UserError(message)

@@ -1,0 +1,169 @@
+"""sympy -> numba source for a problem: the single symbolic source made into compiled scalar code.
+
+The generated text defines, with the state ``y`` a tuple of N floats and ``par`` a tuple of floats:
+
+* ``base_f(y, par) -> tuple``            the vector field F, [B] (2.1);
+* ``base_jac(y, par, J)``               fills J (N x N array) with dF/dy, for Newton;
+* ``integral_<k>(y, par) -> float``     each first integral H_k;
+* ``grad_<k>(y, par) -> tuple``         its gradient, row k of D_H ([B] §2);
+* ``invariants(y, par) -> tuple``       all integrals.
+
+The text and a small JSON of metadata are cached on disk, keyed by the hash of the sources that
+produce them, so that a warm run never imports sympy.
+"""
+from __future__ import annotations
+
+import hashlib
+import inspect
+import json
+import sys
+from types import SimpleNamespace
+
+from suite.cache import cache_dir
+
+
+def _source_hash(problem) -> str:
+    mod = sys.modules[problem.model.__module__]
+    h = hashlib.sha256()
+    for obj in (mod, sys.modules[__name__], sys.modules["problems.base"]):
+        h.update(inspect.getsource(obj).encode())
+    h.update(problem.id.encode())
+    return h.hexdigest()[:16]
+
+
+def problem_code(problem) -> tuple[str, dict]:
+    """Return (source text, metadata) for a problem, from the disk cache or freshly from sympy."""
+    key = _source_hash(problem)
+    d = cache_dir("problems")
+    src_path, meta_path = d / f"{problem.id}-{key}.py.txt", d / f"{problem.id}-{key}.json"
+    if src_path.exists() and meta_path.exists():
+        return src_path.read_text(), json.loads(meta_path.read_text())
+    text, meta = _generate(problem)
+    tmp = src_path.with_suffix(".tmp")
+    tmp.write_text(text)
+    tmp.replace(src_path)
+    tmp = meta_path.with_suffix(".tmp")
+    tmp.write_text(json.dumps(meta))
+    tmp.replace(meta_path)
+    return text, meta
+
+
+def problem_meta(problem) -> dict:
+    return problem_code(problem)[1]
+
+
+def symbolic(problem):
+    """The sympy view of a problem: (state symbols, param symbols, rhs list, {name: integral})."""
+    import sympy as sp
+
+    ys = [sp.Symbol(f"y_{s}", real=True) for s in problem.state]
+    ps = [sp.Symbol(f"c_{p}", real=True) for p in problem.model_params]
+    ns = SimpleNamespace(**{s: y for s, y in zip(problem.state, ys)},
+                         **{p: c for p, c in zip(problem.model_params, ps)})
+    model = problem.model(ns)
+    if model.hamiltonian is not None:
+        # [HLW] (1.10): p' = -H_q, q' = H_p.
+        pn, qn = problem.canonical
+        H = model.hamiltonian
+        deriv = {}
+        for p, q in zip(pn, qn):
+            deriv[p] = -sp.diff(H, getattr(ns, q))
+            deriv[q] = sp.diff(H, getattr(ns, p))
+        rhs = [deriv[s] for s in problem.state]
+    else:
+        rhs = list(model.rhs)
+    return ys, ps, rhs, dict(model.integrals)
+
+
+def _generate(problem) -> tuple[str, dict]:
+    import sympy as sp
+
+    ys, ps, rhs, integrals = symbolic(problem)
+    n = len(ys)
+    if len(rhs) != n:
+        raise ValueError(f"{problem.id}: rhs has {len(rhs)} components for {n} states")
+    names = list(integrals)
+    jac = sp.Matrix(rhs).jacobian(ys)
+    out = [f"# problem {problem.id}: generated from its sympy definition by problems/codegen.py"]
+    out += _function("base_f", ys, ps, rhs, kind="tuple")
+    out += _function("base_jac", ys, ps, list(jac), kind="matrix", shape=(n, n))
+    for k, name in enumerate(names):
+        H = integrals[name]
+        grad = [sp.diff(H, y) for y in ys]
+        out += _function(f"integral_{k}", ys, ps, [H], kind="scalar", comment=name)
+        out += _function(f"grad_{k}", ys, ps, grad, kind="tuple", comment=f"gradient of {name}")
+    calls = ", ".join(f"integral_{k}(y, par)" for k in range(len(names)))
+    out += ["", "@njit(cache=True)", "def invariants(y, par):",
+            f"    return ({calls}{',' if len(names) == 1 else ''})"]
+    meta = {"n": n, "integrals": names, "explicit_u": False, "explicit_v": False,
+            "u_idx": [], "v_idx": []}
+    if problem.partition is not None:
+        u, v = problem.partition
+        ui = [problem.state.index(s) for s in u]
+        vi = [problem.state.index(s) for s in v]
+        meta["u_idx"], meta["v_idx"] = ui, vi
+        # [HLW] (1.9): symplectic Euler is explicit when a = F_u does not depend on u (and its
+        # adjoint when b = F_v does not depend on v); true for separable H = T(p) + V(q).
+        meta["explicit_u"] = all(sp.simplify(jac[i, j]) == 0 for i in ui for j in ui)
+        meta["explicit_v"] = all(sp.simplify(jac[i, j]) == 0 for i in vi for j in vi)
+    return "\n".join(out) + "\n", meta
+
+
+def _printer():
+    from sympy import Rational
+    from sympy.printing.pycode import PythonCodePrinter
+
+    class Printer(PythonCodePrinter):
+        """Python printer that writes x**(k/2) with math.sqrt (numba's pow is slow)."""
+
+        def _print_Pow(self, expr, rational=False):
+            b, e = expr.as_base_exp()
+            if isinstance(e, Rational) and e.q == 2 and abs(e.p) > 1:
+                base = self.parenthesize(b, 100)
+                whole = abs(e.p) // 2
+                power = base if whole == 1 else f"{base}**{whole}"
+                term = f"({power}*math.sqrt({base}))"
+                return f"(1.0/{term})" if e.p < 0 else term
+            if e.is_Integer and e < 0:
+                return f"(1.0/({self.parenthesize(b, 100)}**{-int(e)}))"
+            return super()._print_Pow(expr, rational=rational)
+
+    return Printer({"fully_qualified_modules": True, "standard": "python3"})
+
+
+def _function(name, ys, ps, exprs, kind, shape=None, comment=None):
+    import sympy as sp
+
+    printer = _printer()
+    subs, reduced = sp.cse(exprs, symbols=sp.numbered_symbols("t_"), optimizations="basic")
+    args = "y, par, M" if kind == "matrix" else "y, par"
+    lines = ["", "@njit(cache=True)", f"def {name}({args}):"]
+    if comment:
+        lines.append(f"    # {comment}")
+    used = set().union(*[e.free_symbols for e in exprs]) if exprs else set()
+    used |= set().union(*[e.free_symbols for _, e in subs]) if subs else set()
+    lines.append(f"    {', '.join(str(y) for y in ys)}{',' if len(ys) == 1 else ''} = y")
+    for i, c in enumerate(ps):
+        if c in used:
+            lines.append(f"    {c} = par[{i}]")
+    for s, e in subs:
+        lines.append(f"    {s} = {printer.doprint(e)}")
+    if kind == "scalar":
+        lines.append(f"    return {_num(printer, reduced[0])}")
+    elif kind == "tuple":
+        body = ", ".join(_num(printer, e) for e in reduced)
+        lines.append(f"    return ({body}{',' if len(reduced) == 1 else ''})")
+    else:
+        n, m = shape
+        for i in range(n):
+            for j in range(m):
+                lines.append(f"    M[{i}, {j}] = {_num(printer, reduced[i * m + j])}")
+    return lines
+
+
+def _num(printer, e) -> str:
+    """Print an expression; plain numbers become float literals so the types stay float64."""
+    text = printer.doprint(e)
+    if e.is_number:
+        return repr(float(e))
+    return text

@@ -1,0 +1,58 @@
+"""Exact Kepler motion through Kepler's equation, [HLW] I.2.2, (2.1).
+
+The orbit is rebuilt from the initial point's elements (semi-major axis from the energy, the
+eccentricity vector from the Runge-Lenz vector) and advanced in mean anomaly; Kepler's equation
+E - e sin E = M is solved by Newton's method to round-off.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+
+def solve_kepler(M: np.ndarray, e: float) -> np.ndarray:
+    """Solve E - e sin E = M (vectorized), Newton from E = M + e sin M, to round-off."""
+    M = np.asarray(M, dtype=float)
+    Mr = np.remainder(M + np.pi, 2 * np.pi) - np.pi          # reduce to [-pi, pi)
+    E = Mr + 0.85 * e * np.sign(Mr)                          # Danby's starting value
+    for _ in range(60):
+        f = E - e * np.sin(E) - Mr
+        dE = f / (1 - e * np.cos(E))
+        E = E - dE
+        if np.all(np.abs(dE) <= 4e-16 * (1 + np.abs(E))):
+            break
+    return E + (M - Mr)
+
+
+def kepler_orbit_2d(q0, p0, t, mu=1.0):
+    """Positions and momenta (arrays (len(t), 2)) of the bound Kepler orbit through (q0, p0)."""
+    q0 = np.asarray(q0, dtype=float)
+    p0 = np.asarray(p0, dtype=float)
+    r0 = np.hypot(*q0)
+    L = q0[0] * p0[1] - q0[1] * p0[0]
+    energy = 0.5 * p0 @ p0 - mu / r0
+    if energy >= 0:
+        raise ValueError("kepler_orbit_2d needs a bound orbit (H < 0)")
+    a = -mu / (2 * energy)
+    evec = np.array([p0[1] * L, -p0[0] * L]) / mu - q0 / r0          # Runge-Lenz / mu
+    e = float(np.hypot(*evec))
+    n = np.sqrt(mu / a**3)
+    s = 1.0 if L >= 0 else -1.0
+    if e < 1e-13:                                                   # circular: measure from q0
+        evec_dir = q0 / r0
+        E0 = 0.0
+    else:
+        evec_dir = evec / e
+        cosE = (1 - r0 / a) / e
+        sinE = (q0 @ p0) / (e * np.sqrt(mu * a))
+        E0 = np.arctan2(sinE, cosE)
+    M = (E0 - e * np.sin(E0)) + n * t
+    E = solve_kepler(M, e)
+    b = a * np.sqrt(1 - e * e)
+    x, y = a * (np.cos(E) - e), b * np.sin(E)
+    denom = 1 - e * np.cos(E)
+    vx, vy = -a * n * np.sin(E) / denom, b * n * np.cos(E) / denom
+    ex, ey = evec_dir
+    # perifocal -> inertial: x along the eccentricity vector, y rotated by +90 deg times sign(L)
+    qx, qy = ex * x - s * ey * y, ey * x + s * ex * y
+    px, py = ex * vx - s * ey * vy, ey * vx + s * ex * vy
+    return np.column_stack([qx, qy]), np.column_stack([px, py])

@@ -1,0 +1,1 @@
+"""Reports: tables and figures read from stored results; reports never integrate."""

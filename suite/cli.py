@@ -1,0 +1,104 @@
+"""The ``gnibench`` command line: solve, list, run, bench.
+
+Bad input gives one line on stderr and exit code 2 (no traceback, nothing written).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from suite.errors import UserError
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):  # one line, exit 2 (argparse would print the usage too)
+        raise UserError(message)
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = _Parser(prog="gnibench", description="Benchmark integrators of ODEs with first integrals.")
+    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    s = sub.add_parser("solve", help="integrate one cell and write its trajectory")
+    s.add_argument("problem", help="PROBLEM spec, e.g. kepler-2d:e=0.6")
+    s.add_argument("method", help="METHOD spec, e.g. rk4:h=0.01+observer:theta=10")
+    g = s.add_mutually_exclusive_group(required=True)
+    g.add_argument("--steps", type=int, help="number of steps N")
+    g.add_argument("--t-end", type=float, help="final time T (last step shortened to land on T)")
+    s.add_argument("--every", type=int, default=1, help="sample every K steps (plus the final point)")
+    s.add_argument("--format", choices=("csv", "json", "parquet"), default="csv")
+    s.add_argument("-o", "--output", type=Path, help="output file (default: stdout)")
+
+    ls = sub.add_parser("list", help="list problems or methods")
+    ls.add_argument("what", choices=("problems", "methods"))
+    ls.add_argument("--format", choices=("table", "json"), default="table")
+
+    r = sub.add_parser("run", help="run an experiment (TOML file or shipped name)")
+    r.add_argument("experiment", help="path to a TOML file, or the name of a shipped experiment")
+    r.add_argument("-o", "--output", type=Path, default=None,
+                   help="output directory (default: results/<experiment name>)")
+
+    b = sub.add_parser("bench", help="time kernels in ns/step against a C loop")
+    b.add_argument("--steps", type=int, default=2_000_000)
+    b.add_argument("--no-c", action="store_true", help="skip the gcc -O3 reference loop")
+    return p
+
+
+def _solve(a) -> int:
+    from suite.solve import solve
+    from suite.storage import write_result
+
+    if a.format == "parquet" and a.output is None:
+        raise UserError("--format parquet needs -o FILE (binary output is not written to stdout)")
+    if a.output is not None and not a.output.parent.exists():
+        raise UserError(f"bad -o {a.output}: directory {a.output.parent} does not exist")
+    result = solve(a.problem, a.method, steps=a.steps, t_end=a.t_end, every=a.every)
+    write_result(result, a.format, a.output, sys.stdout)
+    if result.status != "ok":
+        print(f"gnibench: {result.status}: {result.reason}", file=sys.stderr)
+    return 0
+
+
+def _list(a) -> int:
+    from suite.listing import listing
+
+    rows = listing(a.what)
+    if a.format == "json":
+        print(json.dumps(rows, indent=1, default=str))
+    else:
+        from suite.listing import as_table
+
+        print(as_table(a.what, rows))
+    return 0
+
+
+def _run(a) -> int:
+    from suite.runner import run_experiment
+
+    run_experiment(a.experiment, a.output)
+    return 0
+
+
+def _bench(a) -> int:
+    from suite.bench import bench
+
+    bench(steps=a.steps, with_c=not a.no_c)
+    return 0
+
+
+def main(argv=None) -> int:
+    try:
+        a = _parser().parse_args(argv)
+        return {"solve": _solve, "list": _list, "run": _run, "bench": _bench}[a.command](a)
+    except UserError as e:
+        print(f"gnibench: error: {e}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("gnibench: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,51 @@
+"""``gnibench list``: generated from the problem, method and modifier records."""
+from __future__ import annotations
+
+
+def listing(what: str) -> list[dict]:
+    if what == "problems":
+        from problems import REGISTRY
+
+        return [p.describe() for p in REGISTRY.values()]
+    from methods import METHODS, MODIFIERS
+
+    return [m.describe() for m in METHODS.values()] + [m.describe() for m in MODIFIERS.values()]
+
+
+def _default(p: dict) -> str:
+    d = p["default"]
+    if d is None:
+        return "-"
+    if isinstance(d, tuple):
+        return "/".join(f"{x:g}" for x in d)
+    return str(d)
+
+
+def _params(params: list[dict]) -> str:
+    return "; ".join(f"{p['name']}={_default(p)} ({p['range']})" for p in params)
+
+
+def as_table(what: str, rows: list[dict]) -> str:
+    out = []
+    if what == "problems":
+        for r in rows:
+            out.append(f"{r['id']}  {r['title']}  {r['reference']}")
+            out.append(f"    state: {', '.join(r['state'])}   integrals: {', '.join(r['integrals'])}"
+                       f"   partition: {r['partition'] and ' | '.join(','.join(b) for b in r['partition'])}"
+                       f"   exact solution: {'yes' if r['exact_solution'] else 'no'}")
+            out.append(f"    options: {_params(r['params'])}")
+            if r["notes"]:
+                out.append(f"    notes: {r['notes']}")
+        return "\n".join(out)
+    for r in rows:
+        if r.get("kind") == "modifier":
+            out.append(f"+{r['id']}  (modifier)  {r['reference']}  {r['doc']}")
+        else:
+            props = [k for k, v in r["properties"].items() if v is True]
+            ex = r["properties"]["explicit"]
+            if isinstance(ex, str):
+                props.append(f"explicit {ex}")
+            out.append(f"{r['id']}  order {r['order']}  {r['family']}  [{', '.join(props)}]  "
+                       f"{r['reference']}  {r['doc']}")
+        out.append(f"    options: {_params(r['params'])}")
+    return "\n".join(out)

@@ -1,0 +1,131 @@
+"""Spec strings: one syntax on the CLI, in experiment files and in tables.
+
+Grammar (public contract, see README)::
+
+    PROBLEM  := id[:key=value,...]
+    METHOD   := base[:key=value,...] { +modifier[:key=value,...] }
+    lists    := a/b/c
+
+A ``+`` starts a modifier only when a letter follows, so ``1e+6`` stays a number. Every resolved
+configuration has a canonical text (:func:`canonical`) that parses back to the same configuration.
+"""
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from typing import Any
+
+from suite.errors import UserError, unknown
+from suite.params import Param, bind
+
+_MODIFIER_SPLIT = re.compile(r"\+(?=[A-Za-z])")
+_ID = re.compile(r"^[A-Za-z][A-Za-z0-9_-]*$")
+
+
+def parse_item(text: str, what: str) -> tuple[str, dict[str, str]]:
+    """Split ``id:key=value,...`` into the id and a dict of raw option texts."""
+    text = text.strip()
+    name, _, opts = text.partition(":")
+    if not _ID.match(name):
+        raise UserError(f"bad {what} spec {text!r}: expected id[:key=value,...]")
+    given: dict[str, str] = {}
+    if opts:
+        for item in opts.split(","):
+            key, eq, value = item.partition("=")
+            key, value = key.strip(), value.strip()
+            if not eq or not key or not value:
+                raise UserError(f"bad option {item!r} in {what} spec {text!r}: expected key=value")
+            if key in given:
+                raise UserError(f"option {key!r} given twice in {what} spec {text!r}")
+            given[key] = value
+    return name, given
+
+
+def split_method(text: str) -> list[str]:
+    """Split a method spec into its base and modifier parts."""
+    return _MODIFIER_SPLIT.split(text.strip())
+
+
+@dataclass(frozen=True)
+class Bound:
+    """A registry record with validated option values."""
+
+    record: Any
+    values: dict[str, Any]
+
+    @property
+    def id(self) -> str:
+        return self.record.id
+
+    def text(self) -> str:
+        """Canonical ``id:key=value,...`` of this item (relevant, non-None values in schema order)."""
+        parts = []
+        for p in self.record.params:
+            v = self.values.get(p.name)
+            if v is None or not _relevant(p, self.values):
+                continue
+            parts.append(f"{p.name}={p.format(v)}")
+        return self.record.id + (":" + ",".join(parts) if parts else "")
+
+
+def _relevant(p: Param, values: dict[str, Any]) -> bool:
+    if p.only_if is None:
+        return True
+    key, want = p.only_if
+    return values.get(key) == want
+
+
+@dataclass(frozen=True)
+class MethodConfig:
+    """A base method and its modifiers, each bound to its option values."""
+
+    base: Bound
+    modifiers: tuple[Bound, ...]
+
+    def text(self) -> str:
+        return "+".join([self.base.text()] + [m.text() for m in self.modifiers])
+
+
+def parse_problem(text: str) -> Bound:
+    """Resolve a PROBLEM spec against the problem registry."""
+    from problems import REGISTRY
+
+    name, given = parse_item(text, "problem")
+    if name not in REGISTRY:
+        raise unknown("problem", name, REGISTRY)
+    rec = REGISTRY[name]
+    values = bind(rec.params, given, f"problem {name}")
+    rec.validate(values)
+    return Bound(rec, values)
+
+
+def parse_method(text: str, problem: Bound | None = None) -> MethodConfig:
+    """Resolve a METHOD spec; with a problem, modifiers and structure needs are checked against it."""
+    from methods import METHODS, MODIFIERS
+
+    parts = split_method(text)
+    name, given = parse_item(parts[0], "method")
+    if name not in METHODS:
+        if name in MODIFIERS:
+            raise UserError(f"{name!r} is a modifier, not a base method; write e.g. rk4:h=0.01+{name}")
+        raise unknown("method", name, METHODS)
+    rec = METHODS[name]
+    base = Bound(rec, bind(rec.params, given, f"method {name}"))
+    mods = []
+    for part in parts[1:]:
+        mname, mgiven = parse_item(part, "modifier")
+        if mname not in MODIFIERS:
+            raise unknown("modifier", mname, MODIFIERS)
+        mrec = MODIFIERS[mname]
+        values = bind(mrec.params, mgiven, f"modifier {mname}")
+        if problem is not None:
+            values = mrec.resolve(values, problem)
+        mods.append(Bound(mrec, values))
+    if problem is not None:
+        rec.check_structure(problem.record, has_modifiers=bool(mods))
+    return MethodConfig(base, tuple(mods))
+
+
+def canonical(problem: Bound, method: MethodConfig) -> tuple[str, str]:
+    """The canonical texts of a cell's problem and method."""
+    return problem.text(), method.text()
