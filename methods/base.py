@@ -79,6 +79,7 @@ class Modifier:
     generate: Callable
     runtime: Callable
     runtime_size: Callable
+    needs_independent: bool = False    # [B] §2: rank D_H = q on Γ, else D_H D_Hᵀ is singular
 
     def describe(self) -> dict:
         return {"id": self.id, "reference": self.reference, "doc": self.doc, "kind": "modifier",

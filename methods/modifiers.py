@@ -165,7 +165,7 @@ def _generate(kind):
 def _modifier(kind, reference, doc):
     return Modifier(id=kind, reference=reference, doc=doc, params=_COMMON,
                     resolve=_resolve(kind), generate=_generate(kind), runtime=_runtime,
-                    runtime_size=_runtime_size)
+                    runtime_size=_runtime_size, needs_independent=(kind == "observer"))
 
 
 observer = _modifier("observer", "[B] (2.5)-(2.6), normalized gains [B] §2",

@@ -58,6 +58,18 @@ def grid(h: float, steps: int | None, t_end: float | None) -> tuple[int, float]:
     return n, t_end - (n - 1) * h
 
 
+def _check_independent(mod, idx, y0, par, modifier, problem) -> None:
+    """[B] §2 assumes rank D_H = q on Γ; refuse observed integrals that are dependent at y0."""
+    D = np.array([getattr(mod, f"grad_{k}")(tuple(y0), par) for k in idx])
+    sv = np.linalg.svd(D, compute_uv=False)
+    if sv[0] == 0.0 or sv[-1] <= 1e-10 * sv[0]:
+        on = "/".join(modifier.values["on"])
+        raise UserError(
+            f"{modifier.id}: the observed integrals {on} of {problem.id} are not functionally "
+            f"independent at the initial point (rank D_H < {len(idx)}, [B] §2); "
+            f"observe an independent subset with on=...")
+
+
 def versions() -> dict:
     import numba
 
@@ -90,8 +102,10 @@ def solve(problem_text: str, method_text: str, steps: int | None = None,
     h0_all = mod.invariants(tuple(y0), ppar) if names else ()
     extra = []
     for m in method.modifiers:
-        h0 = [h0_all[names.index(x)] for x in m.values["on"]]
-        extra.extend(m.record.runtime(m.values, h0))
+        idx = [names.index(x) for x in m.values["on"]]
+        if m.record.needs_independent:
+            _check_independent(mod, idx, y0, ppar, m, problem)
+        extra.extend(m.record.runtime(m.values, [h0_all[k] for k in idx]))
     par = np.concatenate([ppar, np.array(extra, dtype=np.float64)])
     # warm-up: one step on scratch arrays loads (or compiles) every function of the cell
     scratch = (np.empty(3), np.empty((3, rec.dim)), np.empty((3, 3)))
