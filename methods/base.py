@@ -7,8 +7,9 @@ driven by these records. Each record also carries ``generate(ctx) -> str``: the 
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Callable
+from typing import Any
 
 from suite.errors import UserError
 from suite.params import Param

@@ -31,7 +31,7 @@ def _block(ctx, which: str) -> tuple[str, str]:
     name = f"pstep_{which}"
     if explicit:
         return _explicit_block(name, ctx.n, i_idx, e_idx), "0"
-    tup = lambda xs: "(" + ", ".join(str(x) for x in xs) + ",)"  # noqa: E731
+    tup = lambda xs: "(" + ", ".join(str(x) for x in xs) + ",)"
     consts = (f"\nNI_{which} = {len(i_idx)}\nNE_{which} = {len(e_idx)}\n"
               f"I_IDX_{which} = {tup(i_idx)}\nE_IDX_{which} = {tup(e_idx)}\n")
     rename = {"make_ws_X": f"make_ws_{which}", "step_X": name, "NI": f"NI_{which}",

@@ -8,8 +8,9 @@ structure. Exact solutions, where known, are plain numpy functions of the same r
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Callable
+from typing import Any
 
 from suite.errors import UserError
 from suite.params import Param
@@ -22,6 +23,25 @@ class Model:
     integrals: dict[str, Any]
     hamiltonian: Any = None
     rhs: tuple | None = None
+
+
+@dataclass(frozen=True)
+class Section:
+    """A Poincaré section, part of a problem's definition.
+
+    The section is {g(y) = 0} crossed in the direction where ``condition(y) > 0`` holds
+    (e.g. G-S: g = p1, condition p2 > 0). ``g`` and ``condition`` map the sympy namespace ``S`` to
+    expressions. ``coords`` names the state components (or ``chart_coords``) recorded at a crossing;
+    ``chart``, if given, is ``chart(y) -> int`` (numpy, 1-based) for multi-chart sections such as
+    so(4)'s Γ1..Γ8.
+    """
+
+    name: str
+    g: Callable[[Any], Any]
+    condition: Callable[[Any], Any]
+    coords: tuple[str, ...]
+    reference: str = ""
+    chart: Callable | None = None
 
 
 @dataclass(frozen=True)
@@ -49,6 +69,12 @@ class Problem:
         ``exact(t, y0, values) -> array (len(t), N)``, the exact solution, or None.
     notes:
         Choices made where the seeds are silent (also shown by ``gnibench list``).
+    sections:
+        Poincaré sections (:class:`Section`) that belong to the problem.
+    post_step:
+        Identification map applied after every accepted step, e.g. the homography that maps a
+        geodesic back into the fundamental octagon ([B] (8.3)-(8.4)). A numba-compilable template
+        function ``post_step(y, par) -> y`` (free names as in methods/kernels/free.py).
     """
 
     id: str
@@ -62,6 +88,8 @@ class Problem:
     partition: tuple[tuple[str, ...], tuple[str, ...]] | None = None
     exact: Callable | None = None
     notes: str = ""
+    sections: tuple[Section, ...] = ()
+    post_step: Callable | None = None
     model_params: tuple[str, ...] = field(default=())
 
     def __post_init__(self):
@@ -72,10 +100,13 @@ class Problem:
             if sorted(u + v) != sorted(self.state):
                 raise ValueError(f"{self.id}: partition {self.partition} does not cover {self.state}")
         # Model parameters are the declared ones; initial-value options are appended as <name>0.
-        object.__setattr__(self, "model_params", tuple(p.name for p in self.params))
+        # Idempotent, so dataclasses.replace (which passes the extended params back in) works.
+        init_names = {f"{s}0" for s in self.state}
+        declared = tuple(p for p in self.params if p.name not in init_names)
+        object.__setattr__(self, "model_params", tuple(p.name for p in declared))
         inits = tuple(Param(f"{s}0", None, f"initial value of {s} (default: catalog value)")
                       for s in self.state)
-        object.__setattr__(self, "params", self.params + inits)
+        object.__setattr__(self, "params", declared + inits)
 
     @property
     def dim(self) -> int:

@@ -105,7 +105,7 @@ class Param:
 def format_float(v: float) -> str:
     """Shortest text that round-trips to the same double (Python's repr), without a trailing .0."""
     s = repr(float(v))
-    return s[:-2] if s.endswith(".0") else s
+    return s.removesuffix(".0")
 
 
 def bind(params: tuple[Param, ...], given: dict[str, str], owner: str) -> dict[str, Any]:

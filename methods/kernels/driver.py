@@ -5,7 +5,7 @@ Newton) or non-finite state (status 1), keeping every sample taken so far plus t
 """
 from __future__ import annotations
 
-from methods.kernels.free import N, invariants, make_ws, step, store, to_tuple  # noqa: F401
+from methods.kernels.free import N, invariants, make_ws, step, store, to_tuple
 
 
 def integrate(y0, par, h, nsteps, h_last, every, out_t, out_y, out_c):

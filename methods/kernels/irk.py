@@ -8,8 +8,20 @@ from __future__ import annotations
 
 import numpy as np
 
-from methods.kernels.free import (A, D, N, NEWTON_MAXIT, S, f, fjac, lu_solve, newton_done,  # noqa: F401
-                                  shifted, store, to_tuple)
+from methods.kernels.free import (
+    NEWTON_MAXIT,
+    A,
+    D,
+    N,
+    S,
+    f,
+    fjac,
+    lu_solve,
+    newton_done,
+    shifted,
+    store,
+    to_tuple,
+)
 
 
 def make_ws():

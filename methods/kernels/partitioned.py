@@ -8,8 +8,19 @@ from __future__ import annotations
 
 import numpy as np
 
-from methods.kernels.free import (E_IDX, I_IDX, N, NE, NEWTON_MAXIT, NI, f, fjac,  # noqa: F401
-                                  lu_solve, newton_done, to_tuple)
+from methods.kernels.free import (
+    E_IDX,
+    I_IDX,
+    NE,
+    NEWTON_MAXIT,
+    NI,
+    N,
+    f,
+    fjac,
+    lu_solve,
+    newton_done,
+    to_tuple,
+)
 
 
 def make_ws_X():
