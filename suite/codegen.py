@@ -115,7 +115,11 @@ def module_source(problem, method_cfg) -> tuple[str, dict]:
             "def njit(**kw):  # error_model='numpy': x/0 gives inf/nan instead of raising\n"
             "    return _njit(error_model='numpy', **kw)\n\n\n"
             f"N = {meta['n']}\nNEWTON_MAXIT = {int(method_cfg.base.values.get('newton_maxit', 50))}\n")
-    body = [head, ptext, tuple_helpers(meta["n"]), template(linalg.lu_solve),
+    if problem.record.post_step is not None:
+        post = template(problem.record.post_step)
+    else:
+        post = "\n@njit(cache=True)\ndef post_step(y, par):\n    return y\n"
+    body = [head, ptext, post, tuple_helpers(meta["n"]), template(linalg.lu_solve),
             template(newton.newton_done), field_source(ctx, mods, offsets),
             method_cfg.base.record.generate(ctx), template(driver.integrate),
             template(driver.eval_invariants)]

@@ -1,6 +1,7 @@
 """The fixed-step driver (template): the compiled loop every cell runs.
 
-Samples every ``every`` steps plus the final point; stops at the first failed step (status 2 from
+After each accepted step the problem's ``post_step`` (identity unless the problem has an
+identification map, e.g. [B] (8.3)-(8.4)) is applied. Samples every ``every`` steps plus the final point; stops at the first failed step (status 2 from
 Newton) or non-finite state (status 1), keeping every sample taken so far plus the last good point.
 """
 from __future__ import annotations
@@ -36,7 +37,7 @@ def integrate(y0, par, h, nsteps, h_last, every, out_t, out_y, out_c):
         if probe != 0.0:
             status = 1
             break
-        y = y1
+        y = post_step(y1, par)           # identification map of the problem, or the identity
         done = i + 1
         if done % every == 0 or done == nsteps:
             out_t[row] = done * h if done < nsteps else (nsteps - 1) * h + h_last

@@ -14,4 +14,4 @@ A = C = D = I_IDX = E_IDX = ()
 EXPLICIT = False
 f = fjac = to_tuple = shifted = store = _unbound
 lu_solve = newton_done = _unbound
-invariants = make_ws = step = _unbound
+invariants = make_ws = step = post_step = _unbound
