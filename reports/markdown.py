@@ -1,0 +1,107 @@
+"""The Markdown summary of an experiment run, rendered from its tables only (it never integrates).
+
+:func:`render_summary` takes the provenance dict and the ``cells`` and ``timings`` DataFrames;
+:func:`summary_from_dir` reads them back from a run's Parquet files.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+
+def _num(x, fmt: str = ".2e") -> str:
+    """A number for a table: ``fmt`` for floats, ``–`` for missing values."""
+    import pandas as pd
+
+    if x is None or pd.isna(x):
+        return "–"
+    if isinstance(x, float):
+        return format(x, fmt)
+    return str(x)
+
+
+def _count(x) -> str:
+    """Evaluation counts: integers, or one decimal for the half evaluations of partitioned steps."""
+    import pandas as pd
+
+    if x is None or pd.isna(x):
+        return "–"
+    x = float(x)
+    return f"{x:.0f}" if float(x).is_integer() else f"{x:.1f}"
+
+
+def _cell(x) -> str:
+    """Text safe inside a Markdown table cell."""
+    return str(x).replace("|", "\\|").replace("\n", " ")
+
+
+def _table(header: list[str], rows: list[list[str]]) -> list[str]:
+    out = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
+    out += ["| " + " | ".join(_cell(v) for v in row) + " |" for row in rows]
+    return out
+
+
+def render_summary(meta: dict, cells, timings) -> str:
+    """Markdown: title, reference, description, then one table per problem (a row per cell).
+
+    Columns: cell, method, status, steps, nfev, max |I(y) − I(y0)| for each integral of the
+    problem, final and max global error (where an exact solution exists), wall time of the
+    integration in ms, compile or cache-load time in s. The reasons of the cells that are not
+    ``ok`` are listed under each table.
+    """
+    import pandas as pd
+
+    lines = [f"# {meta.get('title', meta.get('experiment', ''))}", ""]
+    lines.append(f"Experiment `{meta.get('experiment')}` — reference: {meta.get('reference', '')}")
+    lines.append("")
+    if meta.get("description"):
+        lines += [meta["description"].strip(), ""]
+    total, done = meta.get("cells_total", len(cells)), meta.get("cells_done", len(cells))
+    counts = cells["status"].value_counts()
+    order = ("ok", "nonfinite", "newton_failed", "error", "pending")
+    status_text = ", ".join(f"{counts[s]} {s}" for s in sorted(
+        counts.index, key=lambda s: order.index(s) if s in order else len(order)))
+    state = "complete" if meta.get("complete", True) else f"INCOMPLETE: {done} of {total} cells done"
+    lines += [f"{total} cells ({status_text}); {state}.", ""]
+    wall = dict(zip(timings["cell"], timings["wall_seconds"])) if len(timings) else {}
+    comp = dict(zip(timings["cell"], timings["compile_seconds"])) if len(timings) else {}
+    for problem in pd.unique(cells["problem"]):
+        part = cells[cells["problem"] == problem]
+        errs = [c for c in part.columns if c.startswith("max_abs_err_") and part[c].notna().any()]
+        has_exact = part["final_global_error"].notna().any()
+        header = ["cell", "method", "status", "t", "steps", "nfev"]
+        header += [f"max \\|err {c[len('max_abs_err_'):]}\\|" for c in errs]
+        if has_exact:
+            header += ["final global error", "max global error"]
+        header += ["run ms", "compile s"]
+        rows = []
+        for r in part.itertuples(index=False):
+            d = r._asdict()
+            row = [d["cell"], f"`{d['method']}`", d["status"], _num(d["t_final"], ".4g"),
+                   _num(d["steps"]), _count(d["nfev"])]
+            row += [_num(d[c]) for c in errs]
+            if has_exact:
+                row += [_num(d["final_global_error"]), _num(d["max_global_error"])]
+            ms = wall.get(d["cell"], float("nan")) * 1e3
+            row += [_num(ms, ".3g"), _num(comp.get(d["cell"]), ".2f")]
+            rows.append(row)
+        lines += [f"## `{problem}`", ""] + _table(header, rows) + [""]
+        notes = [f"- cell {r.cell} ({r.status}): {r.reason}" for r in part.itertuples()
+                 if r.status not in ("ok", "pending") and r.reason]
+        if notes:
+            lines += notes + [""]
+    lines += [("Tables: `samples.parquet` (one row per cell and sample), `cells.parquet` (one row "
+               "per cell), `timings.parquet` (wall and compile times). Wall times are not "
+               "reproducible; everything else is."), ""]
+    return "\n".join(lines)
+
+
+def summary_from_dir(out_dir: str | Path) -> str:
+    """Render the summary of a finished (or partial) run from its Parquet files."""
+    import pandas as pd
+
+    from suite.storage import read_parquet_meta
+
+    out = Path(out_dir)
+    meta = read_parquet_meta(out / "cells.parquet")
+    return render_summary(meta, pd.read_parquet(out / "cells.parquet"),
+                          pd.read_parquet(out / "timings.parquet"))

@@ -1,0 +1,285 @@
+"""Experiment files: a TOML description of a matrix of cells, validated before anything runs.
+
+An experiment is a TOML file, given by path or by the name of one shipped in
+``suite/experiments/`` (``gnibench run quick``). Schema (also in ``suite/experiments/README.md``)::
+
+    name        = "hlw-fig-1.4"      # required; letters, digits, . _ -; output dir results/<name>
+    title       = "..."              # required, one line
+    reference   = "[HLW] Fig 1.4"    # required: the place in the seeds
+    description = "..."              # optional; (choice) notes go here
+    t_end = 10.0                     # default horizon of every group: t_end OR steps
+    every = 1                        # default sampling: a sample every K steps (plus the last)
+
+    [[cells]]                        # a group; the cells are problems x methods x vary values
+    label    = "symplectic Euler"    # optional, shown in the summary
+    problems = ["pendulum:q0=0"]     # PROBLEM spec strings (README: spec strings)
+    methods  = ["symplectic-euler:h=0.3"]
+    steps = 100                      # optional: replaces the top-level horizon for this group
+    every = 1                        # optional
+    vary.h = [0.3, 0.15]             # a base-method option, one cell per value
+    vary.problem.p0 = [0.7, 1.4]     # a problem option
+    vary.observer.theta = [1, 15]    # an option of a modifier (only methods that have it)
+
+A ``vary`` value overrides the same option written in a spec. Values are numbers, strings,
+booleans, or lists of numbers (written ``a/b`` in the spec). The cells of a group are the product
+problems x vary.problem x methods x (method vary keys), in that order, numbered from 0 across
+the groups. Every cell is checked before any runs (unknown keys, specs through
+:func:`suite.solve.prepare`, horizons, sample counts, duplicates); a bad one raises
+:class:`~suite.errors.UserError` naming the place and what is allowed.
+"""
+from __future__ import annotations
+
+import itertools
+import math
+import re
+import tomllib
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+
+from suite.errors import UserError, unknown
+from suite.params import format_float
+from suite.spec import parse_item, split_method
+
+TOP_KEYS = ("name", "title", "reference", "description", "t_end", "steps", "every", "cells")
+GROUP_KEYS = ("label", "problems", "methods", "t_end", "steps", "every", "vary")
+MAX_SAMPLES = 10_000_000      # rows per cell: beyond this, ask for a larger `every`
+_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]*$")
+
+
+@dataclass(frozen=True)
+class Cell:
+    """One problem x method x horizon: the unit of work of the runner.
+
+    ``problem_spec``/``method_spec`` are the texts given to :func:`suite.solve.solve`;
+    ``problem``/``method`` are their canonical texts (what the tables show).
+    """
+
+    id: int
+    group: int
+    label: str
+    problem_spec: str
+    method_spec: str
+    problem: str
+    method: str
+    h: float
+    steps: int | None
+    t_end: float | None
+    every: int
+    nsteps: int
+    t_final: float
+
+
+@dataclass(frozen=True)
+class Experiment:
+    """A validated experiment: its texts and its expanded cells."""
+
+    name: str
+    title: str
+    reference: str
+    description: str
+    source: str
+    text: str
+    cells: tuple[Cell, ...]
+
+
+def shipped() -> dict[str, str]:
+    """Names of the shipped experiments and their TOML texts."""
+    root = resources.files("suite") / "experiments"
+    return {f.name[:-5]: f.read_text(encoding="utf-8") for f in root.iterdir()
+            if f.name.endswith(".toml")}
+
+
+def load_experiment(name_or_path: str | Path) -> Experiment:
+    """Read, validate and expand an experiment given by path or shipped name."""
+    arg = str(name_or_path)
+    path = Path(arg)
+    if path.suffix == ".toml" or "/" in arg or path.is_file():
+        if not path.is_file():
+            raise UserError(f"no experiment file {arg!r}")
+        text, source = path.read_text(encoding="utf-8"), path.name
+    else:
+        known = shipped()
+        if arg not in known:
+            raise unknown("experiment", arg, known)
+        text, source = known[arg], f"{arg}.toml"
+    return parse_experiment(text, source)
+
+
+def parse_experiment(text: str, source: str) -> Experiment:
+    """Validate an experiment's TOML text and expand its cells (``source`` names it in errors)."""
+    try:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise UserError(f"{source}: not valid TOML: {e}") from None
+    _keys(doc, TOP_KEYS, source)
+    name = _text(doc, "name", source, required=True)
+    if not _NAME.match(name):
+        raise UserError(f"{source}: bad name {name!r}; allowed: letters, digits and . _ - "
+                        "(it names the output directory)")
+    title = _text(doc, "title", source, required=True)
+    reference = _text(doc, "reference", source, required=True)
+    description = _text(doc, "description", source)
+    groups = doc.get("cells")
+    if not isinstance(groups, list) or not groups or not all(isinstance(g, dict) for g in groups):
+        raise UserError(f"{source}: needs at least one [[cells]] group")
+    defaults = {k: doc[k] for k in ("t_end", "steps", "every") if k in doc}
+    cells: list[Cell] = []
+    for gi, group in enumerate(groups):
+        cells.extend(_expand(group, gi, defaults, f"{source}: cells[{gi}]", len(cells)))
+    seen: dict[tuple, int] = {}
+    for c in cells:
+        key = (c.problem, c.method, c.steps, c.t_end, c.every)
+        if key in seen:
+            raise UserError(f"{source}: cell {c.id} ({c.problem} {c.method}) duplicates cell "
+                            f"{seen[key]}; allowed: each cell once")
+        seen[key] = c.id
+    return Experiment(name, title, reference, description, source, text, tuple(cells))
+
+
+def _keys(table: dict, allowed: tuple[str, ...], where: str) -> None:
+    for key in table:
+        if key not in allowed:
+            raise UserError(f"{where}: {unknown('key', key, allowed)}")
+
+
+def _text(table: dict, key: str, where: str, required: bool = False) -> str:
+    if key not in table:
+        if required:
+            raise UserError(f"{where}: missing key {key!r} (a string)")
+        return ""
+    value = table[key]
+    if not isinstance(value, str) or (required and not value.strip()):
+        raise UserError(f"{where}: bad {key} = {value!r}; allowed: a non-empty string")
+    return value
+
+
+def _spec_list(group: dict, key: str, where: str) -> list[str]:
+    value = group.get(key)
+    if not isinstance(value, list) or not value or not all(isinstance(s, str) for s in value):
+        raise UserError(f"{where}: bad or missing {key} = {value!r}; allowed: a non-empty list "
+                        "of spec strings")
+    return value
+
+
+def _horizon(group: dict, defaults: dict, where: str) -> tuple[int | None, float | None, int]:
+    """steps or t_end (a group's horizon replaces the default one) and every."""
+    src = group if ("steps" in group or "t_end" in group) else defaults
+    if "steps" in src and "t_end" in src:
+        raise UserError(f"{where}: both steps and t_end given; allowed: exactly one of them")
+    if "steps" not in src and "t_end" not in src:
+        raise UserError(f"{where}: no horizon; give t_end or steps (in the group or at the top)")
+    steps = t_end = None
+    if "steps" in src:
+        steps = _integer(src["steps"], "steps", where)
+    else:
+        t_end = src["t_end"]
+        if isinstance(t_end, bool) or not isinstance(t_end, (int, float)) or not (
+                math.isfinite(t_end) and t_end > 0):
+            raise UserError(f"{where}: bad t_end = {t_end!r}; allowed: a finite number > 0")
+        t_end = float(t_end)
+    every = _integer(group.get("every", defaults.get("every", 1)), "every", where)
+    return steps, t_end, every
+
+
+def _integer(value, key: str, where: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+        raise UserError(f"{where}: bad {key} = {value!r}; allowed: an integer >= 1")
+    return value
+
+
+def _value_text(value, where: str) -> str:
+    """Spec text of one vary value: floats round-trip, lists become a/b/c."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float) and math.isfinite(value):
+        return format_float(value)
+    if isinstance(value, str) and value and not re.search(r"[,:=+\s]", value):
+        return value
+    if isinstance(value, list) and value and all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) for v in value):
+        return "/".join(_value_text(v, where) for v in value)
+    raise UserError(f"{where}: bad value {value!r}; allowed: a finite number, a boolean, a word, "
+                    "or a list of numbers")
+
+
+def _vary(group: dict, where: str) -> tuple[list[tuple[str, str, list[str]]], ...]:
+    """(target, option, [value texts]) triples: target is 'problem', 'method' or a modifier id."""
+    vary = group.get("vary", {})
+    if not isinstance(vary, dict):
+        raise UserError(f"{where}: bad vary = {vary!r}; allowed: a table of option = [values]")
+    out = []
+    for key, value in vary.items():
+        if isinstance(value, dict):
+            items = [(key, opt, vals) for opt, vals in value.items()]
+        else:
+            items = [("method", key, value)]
+        for target, opt, vals in items:
+            here = f"{where}: vary.{'' if target == 'method' else target + '.'}{opt}"
+            if not isinstance(vals, list) or not vals:
+                raise UserError(f"{here}: bad value {vals!r}; allowed: a non-empty list of values")
+            out.append((target, opt, [_value_text(v, here) for v in vals]))
+    problem_vary = [v for v in out if v[0] == "problem"]
+    method_vary = [v for v in out if v[0] != "problem"]
+    return problem_vary, method_vary
+
+
+def with_options(spec: str, target: str, options: dict[str, str]) -> str:
+    """The spec with the options of ``target`` ('problem', 'method' = the base, or a modifier id)
+    set to the given texts; unchanged when ``target`` is a modifier the spec does not have."""
+    parts = [spec] if target == "problem" else split_method(spec)
+    out = []
+    for i, part in enumerate(parts):
+        name, given = parse_item(part, "problem" if target == "problem" else "method")
+        if (i == 0 and target in ("problem", "method")) or (i > 0 and name == target):
+            given = {**given, **options}
+        out.append(name + (":" + ",".join(f"{k}={v}" for k, v in given.items()) if given else ""))
+    return "+".join(out)
+
+
+def _expand(group: dict, gi: int, defaults: dict, where: str, first_id: int) -> list[Cell]:
+    from suite.solve import grid, prepare
+
+    _keys(group, GROUP_KEYS, where)
+    label = _text(group, "label", where)
+    problems = _spec_list(group, "problems", where)
+    methods = _spec_list(group, "methods", where)
+    steps, t_end, every = _horizon(group, defaults, where)
+    problem_vary, method_vary = _vary(group, where)
+    for target, opt, _ in method_vary:
+        modifiers = {part.partition(":")[0].strip() for m in methods for part in split_method(m)[1:]}
+        if target != "method" and target not in modifiers:
+            raise UserError(f"{where}: vary.{target}.{opt}: no method of the group has the "
+                            f"modifier {target!r}")
+    cells = []
+    for pgiven, *pvals in itertools.product(problems, *[v[2] for v in problem_vary]):
+        for mgiven, *mvals in itertools.product(methods, *[v[2] for v in method_vary]):
+            here = f"{where}: {pgiven} {mgiven}"
+            try:
+                pspec = _apply(pgiven, problem_vary, pvals)
+                mspec = _apply(mgiven, method_vary, mvals)
+                here = f"{where}: {pspec} {mspec}"
+                problem, method = prepare(pspec, mspec)
+                h = float(method.base.values["h"])
+                nsteps, h_last = grid(h, steps, t_end)
+            except UserError as e:
+                raise UserError(f"{here}: {e}") from None
+            samples = 2 + nsteps // every
+            if samples > MAX_SAMPLES:
+                raise UserError(f"{here}: {nsteps} steps sampled every {every} give {samples} "
+                                f"rows; allowed: at most {MAX_SAMPLES} (raise every)")
+            cells.append(Cell(first_id + len(cells), gi, label, pspec, mspec, problem.text(),
+                              method.text(), h, steps, t_end, every, nsteps,
+                              (nsteps - 1) * h + h_last))
+    return cells
+
+
+def _apply(spec: str, vary: list, values: list[str]) -> str:
+    by_target: dict[str, dict[str, str]] = {}
+    for (target, opt, _), value in zip(vary, values):
+        by_target.setdefault(target, {})[opt] = value
+    for target, options in by_target.items():
+        spec = with_options(spec, target, options)
+    return spec

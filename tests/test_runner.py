@@ -1,0 +1,163 @@
+"""The experiment runner: validation before running, statuses, outputs, reproducibility."""
+from __future__ import annotations
+
+import math
+
+import pandas as pd
+import pytest
+
+import suite.solve
+from reports.markdown import summary_from_dir
+from suite.cli import main
+from suite.experiment import load_experiment, parse_experiment, shipped, with_options
+from suite.storage import read_parquet_meta
+
+OUTPUTS = ("samples.parquet", "cells.parquet", "timings.parquet", "summary.md")
+
+# One kernel (kepler-2d x euler) serves every cell: h is a run-time number.
+TINY = """
+name = "tiny"
+title = "Tiny test experiment"
+reference = "[HLW] (2.2)"
+steps = 20
+every = 5
+
+[[cells]]
+label = "euler"
+problems = ["kepler-2d"]
+methods = ["euler"]
+vary.h = [0.05, 1e200, 0.025]
+"""
+
+
+@pytest.fixture
+def tiny(tmp_path):
+    path = tmp_path / "tiny.toml"
+    path.write_text(TINY)
+    return path
+
+
+@pytest.fixture
+def failing_cell(monkeypatch):
+    """Make the cell with h = 0.025 raise, as an unexpected bug would."""
+    real = suite.solve.solve
+
+    def solve(problem, method, **kw):
+        if "h=0.025" in method:
+            raise RuntimeError("boom")
+        return real(problem, method, **kw)
+
+    monkeypatch.setattr(suite.solve, "solve", solve)
+
+
+@pytest.mark.parametrize("name", sorted(shipped()))
+def test_shipped_experiments_validate(name):
+    e = load_experiment(name)
+    assert e.name == name and e.title and e.reference and e.cells
+    assert [c.id for c in e.cells] == list(range(len(e.cells)))
+
+
+def test_vary_overrides_spec_and_reaches_only_named_modifier():
+    assert with_options("euler:h=0.1", "method", {"h": "0.2"}) == "euler:h=0.2"
+    assert with_options("rk4+observer:theta=1", "observer", {"theta": "15"}) == \
+        "rk4+observer:theta=15"
+    assert with_options("rk4", "observer", {"theta": "15"}) == "rk4"
+    assert with_options("pendulum:q0=0", "problem", {"p0": "0.7"}) == "pendulum:q0=0,p0=0.7"
+
+
+def test_expansion_order_and_horizon_override():
+    e = parse_experiment("""
+name = "x"
+title = "t"
+reference = "r"
+t_end = 1.0
+[[cells]]
+problems = ["pendulum:q0=0"]
+methods = ["euler", "rk4"]
+steps = 3
+vary.h = [0.1, 0.2]
+vary.problem.p0 = [0.7, 1.4]
+""", "x.toml")
+    got = [(c.problem, c.method, c.steps, c.t_end) for c in e.cells]
+    assert got[:3] == [("pendulum:p0=0.7,q0=0", "euler:h=0.1", 3, None),
+                       ("pendulum:p0=0.7,q0=0", "euler:h=0.2", 3, None),
+                       ("pendulum:p0=0.7,q0=0", "rk4:h=0.1", 3, None)]
+    assert len(got) == 8
+
+
+def test_run_end_to_end(tiny, tmp_path, failing_cell, capsys):
+    out = tmp_path / "out"
+    assert main(["run", str(tiny), "-o", str(out)]) == 0
+    assert sorted(p.name for p in out.iterdir()) == sorted(OUTPUTS)
+    cells = pd.read_parquet(out / "cells.parquet")
+    assert list(cells["status"]) == ["ok", "nonfinite", "error"]
+    assert cells["reason"][1].startswith("state overflowed")
+    assert cells["reason"][2] == "RuntimeError: boom"
+    assert math.isinf(cells["max_abs_err_H"][1]) and cells["max_abs_err_H"][0] < 1
+    assert cells["steps"][0] == 20 and pd.isna(cells["steps"][2])
+    samples = pd.read_parquet(out / "samples.parquet")
+    assert sorted(set(samples["cell"])) == [0, 1]
+    assert list(samples[samples["cell"] == 0]["steps"]) == [0, 5, 10, 15, 20]
+    meta = read_parquet_meta(out / "samples.parquet")
+    assert meta["experiment"] == "tiny" and meta["experiment_toml"] == TINY
+    assert meta["complete"] and meta["cells"][2]["method"] == "euler:h=0.025"
+    assert "wall_seconds" in pd.read_parquet(out / "timings.parquet")
+    summary = (out / "summary.md").read_text()
+    assert "Tiny test experiment" in summary and "RuntimeError: boom" in summary
+    assert summary_from_dir(out) == summary          # the report is a function of the tables
+    assert len(capsys.readouterr().err.strip().splitlines()) == 4      # header + a line per cell
+
+
+def test_two_runs_are_bit_identical(tiny, tmp_path):
+    a, b = tmp_path / "a", tmp_path / "b"
+    assert main(["run", str(tiny), "-o", str(a)]) == 0
+    assert main(["run", str(tiny), "-o", str(b)]) == 0
+    for name in ("samples.parquet", "cells.parquet"):
+        assert (a / name).read_bytes() == (b / name).read_bytes()
+
+
+def test_interrupt_keeps_finished_cells(tiny, tmp_path, monkeypatch):
+    real = suite.solve.solve
+
+    def solve(problem, method, **kw):
+        if "h=1e+200" in method or "h=1e200" in method:
+            raise KeyboardInterrupt
+        return real(problem, method, **kw)
+
+    monkeypatch.setattr(suite.solve, "solve", solve)
+    out = tmp_path / "out"
+    assert main(["run", str(tiny), "-o", str(out)]) == 130
+    cells = pd.read_parquet(out / "cells.parquet")
+    assert list(cells["status"]) == ["ok", "pending", "pending"]
+    assert not read_parquet_meta(out / "cells.parquet")["complete"]
+    assert "INCOMPLETE: 1 of 3" in (out / "summary.md").read_text()
+
+
+BAD = {
+    "unknown key": ("methods = [\"euler\"]\nmetods = [\"rk4\"]", "unknown key 'metods'"),
+    "bad spec": ("methods = [\"eulr:h=0.1\"]", "unknown method 'eulr'"),
+    "bad h": ("methods = [\"euler\"]\nvary.h = [0.1, -0.1]", "h='-0.1'"),
+    "bad steps": ("methods = [\"euler\"]\nsteps = 0", "bad steps = 0"),
+    "bad every": ("methods = [\"euler\"]\nevery = 1.5", "bad every = 1.5"),
+    "no modifier": ("methods = [\"euler\"]\nvary.observer.theta = [1]", "modifier 'observer'"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD))
+def test_bad_experiment_exits_2_and_writes_nothing(case, tmp_path, capsys):
+    body, message = BAD[case]
+    path = tmp_path / "bad.toml"
+    path.write_text(f'name = "bad"\ntitle = "t"\nreference = "r"\nt_end = 1.0\n'
+                    f'[[cells]]\nproblems = ["pendulum"]\n{body}\n')
+    out = tmp_path / "out"
+    assert main(["run", str(path), "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and message in err
+    assert not out.exists()
+
+
+def test_unknown_experiment_name_suggests(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert main(["run", "quik"]) == 2
+    assert "did you mean 'quick'" in capsys.readouterr().err
+    assert not (tmp_path / "results").exists()
