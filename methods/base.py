@@ -16,7 +16,8 @@ from suite.params import Param
 
 H_PARAM = Param("h", 0.01, "step size", low=0.0, low_open=True)
 NEWTON_PARAMS = (
-    Param("newton_maxit", 50, "maximum Newton iterations per step", kind="int", low=1, high=1000),
+    Param("newton_maxit", 50, "maximum Newton iterations per step", kind="int", low=1, high=1000,
+          show_default=False),
 )
 
 

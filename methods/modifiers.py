@@ -50,6 +50,8 @@ def _resolve(kind):
             raise UserError(f"{kind}: integral listed twice in on={'/'.join(on)}")
         out = dict(values, on=tuple(on))
         q = len(on)
+        if kind == "observer":
+            _check_independent(problem, names, on)
         for key in ("theta", "alpha", "beta", "H0"):
             v = out[key]
             if v is None:
@@ -62,6 +64,24 @@ def _resolve(kind):
             out[key] = tuple(v)
         return out
     return resolve
+
+
+def _check_independent(problem, names, on) -> None:
+    """[B] §2 assumes rank D_H = q on Γ; refuse observed integrals that are dependent at y0."""
+    import numpy as np
+
+    from problems.codegen import python_functions
+
+    fns = python_functions(problem.record)
+    y0 = problem.record.y0(problem.values)
+    par = problem.record.par(problem.values)
+    D = np.array([fns[f"grad_{names.index(x)}"](y0, par) for x in on], dtype=float)
+    sv = np.linalg.svd(D, compute_uv=False)
+    if not np.all(np.isfinite(sv)) or sv[0] == 0.0 or sv[-1] <= 1e-10 * sv[0]:
+        raise UserError(
+            f"observer: the observed integrals {'/'.join(on)} of {problem.id} are not functionally "
+            f"independent at the initial point (rank D_H < {len(on)}, [B] §2); "
+            f"observe an independent subset with on=...")
 
 
 def _runtime(values, h0_at_start):

@@ -167,3 +167,18 @@ def _num(printer, e) -> str:
     if e.is_number:
         return repr(float(e))
     return text
+
+
+_python: dict[str, dict] = {}
+
+
+def python_functions(problem) -> dict:
+    """The generated functions as plain Python (no numba): for checks made before compiling."""
+    text, _ = problem_code(problem)
+    if text not in _python:
+        import math
+
+        namespace = {"math": math, "njit": lambda **kw: (lambda fn: fn)}
+        exec(compile(text, f"<{problem.id} python>", "exec"), namespace)
+        _python[text] = namespace
+    return _python[text]

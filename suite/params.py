@@ -30,6 +30,7 @@ class Param:
     high_open: bool = False
     choices: tuple[str, ...] | None = None
     only_if: tuple[str, Any] | None = None   # (other option, value) under which this one matters
+    show_default: bool = True    # canonical text includes it even at its default value
 
     def range_text(self) -> str:
         if self.choices:

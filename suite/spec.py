@@ -58,11 +58,14 @@ class Bound:
         return self.record.id
 
     def text(self) -> str:
-        """Canonical ``id:key=value,...`` of this item (relevant, non-None values in schema order)."""
+        """Canonical ``id:key=value,...``: relevant, non-None values in schema order; options marked
+        ``show_default=False`` (solver tuning such as newton_maxit) only when not at their default."""
         parts = []
         for p in self.record.params:
             v = self.values.get(p.name)
             if v is None or not _relevant(p, self.values):
+                continue
+            if not p.show_default and v == p.default:
                 continue
             parts.append(f"{p.name}={p.format(v)}")
         return self.record.id + (":" + ",".join(parts) if parts else "")
