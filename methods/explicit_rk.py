@@ -23,28 +23,43 @@ def _lincomb(name: str, n: int, k: int) -> str:
             f"    return ({comps}{',' if n == 1 else ''})\n")
 
 
+def stage_lines(tab: Tableau, count: int, first: str = "f(y, par)") -> tuple[list[str], set[int]]:
+    """Lines computing stages k0..k{count-1} of ``tab`` (zero coefficients skipped)."""
+    lines, arities = [], set()
+    for i in range(count):
+        terms = [(tab.a[i][j], j) for j in range(i) if tab.a[i][j] != 0]
+        if i == 0:
+            lines.append(f"    k0 = {first}")
+        elif terms:
+            arities.add(len(terms))
+            args = ", ".join(f"{lit(c)}, k{j}" for c, j in terms)
+            lines.append(f"    k{i} = f(erk_lc{len(terms)}(y, h, {args}), par)")
+        else:
+            lines.append(f"    k{i} = f(y, par)")
+    return lines, arities
+
+
+def combination(weights, arities: set[int]) -> str:
+    """y + h Σ w_j k_j over the non-zero weights (registers the helper arity)."""
+    terms = [(w, j) for j, w in enumerate(weights) if w != 0]
+    arities.add(len(terms))
+    return f"erk_lc{len(terms)}(y, h, " + ", ".join(f"{lit(c)}, k{j}" for c, j in terms) + ")"
+
+
+def helpers(n: int, arities: set[int]) -> str:
+    return "".join(_lincomb(f"erk_lc{k}", n, k) for k in sorted(arities))
+
+
 def generate_erk(tab: Tableau):
     """Return a generator ``ctx -> source`` of ``make_ws`` and ``step`` for an explicit tableau."""
 
     def generate(ctx) -> str:
-        s, n = tab.stages, ctx.n
-        arities = set()
-        lines = ["\n@njit(cache=True)\ndef step(y, h, par, ws):"]
-        for i in range(s):
-            terms = [(tab.a[i][j], j) for j in range(i) if tab.a[i][j] != 0]
-            if terms:
-                arities.add(len(terms))
-                args = ", ".join(f"{lit(c)}, k{j}" for c, j in terms)
-                lines.append(f"    k{i} = f(erk_lc{len(terms)}(y, h, {args}), par)")
-            else:
-                lines.append(f"    k{i} = f(y, par)")
-        terms = [(tab.b[j], j) for j in range(s) if tab.b[j] != 0]
-        arities.add(len(terms))
-        args = ", ".join(f"{lit(c)}, k{j}" for c, j in terms)
-        lines.append(f"    return erk_lc{len(terms)}(y, h, {args}), {float(s)!r}, 0.0, 0")
-        helpers = "".join(_lincomb(f"erk_lc{k}", n, k) for k in sorted(arities))
+        s = max(j for j, b in enumerate(tab.b) if b != 0) + 1   # trailing zero-weight stages unused
+        lines, arities = stage_lines(tab, s)
+        lines = ["\n@njit(cache=True)\ndef step(y, h, par, ws):"] + lines
+        lines.append(f"    return {combination(tab.b[:s], arities)}, {float(s)!r}, 0.0, 0")
         ws = "\n@njit(cache=True)\ndef make_ws():\n    return 0\n"
-        return helpers + ws + "\n".join(lines) + "\n"
+        return helpers(ctx.n, arities) + ws + "\n".join(lines) + "\n"
 
     return generate
 

@@ -16,6 +16,17 @@ from suite.codegen import template
 IMPLICIT_EULER = tableau([[1]], [1], [1], order=1)                      # [HLW] (1.6)
 IMPLICIT_MIDPOINT = tableau([["1/2"]], [1], ["1/2"], order=2)           # [HLW] (1.7)
 
+# Gauss-Legendre collocation (HLW II.1.3, Table 1.1-1.2); entries with sqrt(3), sqrt(15) are the
+# nearest doubles. 2 stages: Butcher's 4th-order implicit symplectic method ([B] §6, §8).
+_R3, _R15 = 3 ** 0.5, 15 ** 0.5
+GAUSS4 = tableau([[1 / 4, 1 / 4 - _R3 / 6], [1 / 4 + _R3 / 6, 1 / 4]], ["1/2", "1/2"],
+                 [1 / 2 - _R3 / 6, 1 / 2 + _R3 / 6], order=4)
+GAUSS6 = tableau([[5 / 36, 2 / 9 - _R15 / 15, 5 / 36 - _R15 / 30],
+                  [5 / 36 + _R15 / 24, 2 / 9, 5 / 36 - _R15 / 24],
+                  [5 / 36 + _R15 / 30, 2 / 9 + _R15 / 15, 5 / 36]],
+                 ["5/18", "4/9", "5/18"], [1 / 2 - _R15 / 10, 1 / 2, 1 / 2 + _R15 / 10],
+                 order=6)
+
 
 def _d_coefficients(tab: Tableau) -> tuple[Fr, ...]:
     """d = b^T A^{-1}, exactly (Gauss-Jordan on A^T d = b in rationals), so y1 = y + sum_j d_j Z_j."""
@@ -51,5 +62,10 @@ def irk_method(id, tab, reference, doc, **props):
 
 
 implicit_euler = irk_method("implicit-euler", IMPLICIT_EULER, "[HLW] (1.6)", "implicit Euler method")
+gauss4 = irk_method("gauss4", GAUSS4, "[B] §6, §8 (Butcher's 4th-order method); HLW II.1.3",
+                    "2-stage Gauss-Legendre collocation (Butcher 1964)", symplectic=True,
+                    symmetric=True, aliases=("butcher4",))
+gauss6 = irk_method("gauss6", GAUSS6, "HLW II.1.3", "3-stage Gauss-Legendre collocation",
+                    symplectic=True, symmetric=True)
 implicit_midpoint = irk_method("implicit-midpoint", IMPLICIT_MIDPOINT, "[HLW] (1.7)",
                                "implicit midpoint rule", symplectic=True, symmetric=True)

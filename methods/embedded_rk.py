@@ -1,0 +1,183 @@
+"""Embedded Runge-Kutta pairs: fixed step, or adaptive with Hairer's step-size control.
+
+Each pair is data: a tableau (the propagated solution), error weights e = b - b̂ over the stages
+(and over f(y1) when the last stage is f(y1), "first same as last"), and the controller constants of
+the code it follows. One generator writes the cell's ``step`` (fixed step: the propagated solution)
+or ``step_err`` (adaptive: also the scaled rms error); methods/kernels/adaptive.py drives it.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from fractions import Fraction as Fr
+
+import methods.dop853_coefficients as dop853_data
+from methods.base import H_PARAM, Method
+from methods.explicit_rk import combination, generate_erk, helpers, stage_lines
+from methods.kernels import adaptive
+from methods.tableau import Tableau, lit, tableau
+from suite.codegen import template
+from suite.params import Param
+
+
+@dataclass(frozen=True)
+class Pair:
+    """An embedded pair with the constants of its step-size controller (HNW I, §II.4)."""
+
+    tab: Tableau
+    e: tuple                    # error weights over the stages (incl. f(y1) if fsal)
+    iord: int                   # order used by the initial-step heuristic
+    expo: float                 # err exponent: 1/(q+1) - 0.75 beta (DOPRI5), 1/8 (DOP853)
+    beta: float = 0.0           # PI stabilisation (DOPRI5: 0.04)
+    safe: float = 0.9
+    fac1: float = 0.2           # new h / old h >= fac1
+    fac2: float = 10.0          # new h / old h <= fac2
+    e3: tuple | None = None     # DOP853's 3rd-order weights (its combined estimate)
+
+    def __post_init__(self):
+        if abs(sum(self.e)) > 1e-14:
+            raise ValueError("error weights must sum to 0 (b and b̂ both sum to 1)")
+        if self.fsal and len(self.e) != self.tab.stages:
+            raise ValueError("error weights must cover every stage")
+
+    @property
+    def fsal(self) -> bool:
+        """The last stage is f(y1): its row of A is b and its c is 1."""
+        s = self.tab.stages
+        return self.tab.c[-1] == 1 and all(self.tab.a[s - 1][j] == self.tab.b[j] for j in range(s))
+
+
+def _fr(x):
+    return Fr(x) if isinstance(x, str) else Fr(float(x))
+
+
+# Dormand-Prince 5(4), as in Hairer's DOPRI5 (HNW I, Table II.5.2); stage 7 is f(y1).
+DOPRI5 = Pair(
+    tab=tableau(
+        [[0] * 7, ["1/5"] + [0] * 6, ["3/40", "9/40"] + [0] * 5,
+         ["44/45", "-56/15", "32/9"] + [0] * 4,
+         ["19372/6561", "-25360/2187", "64448/6561", "-212/729", 0, 0, 0],
+         ["9017/3168", "-355/33", "46732/5247", "49/176", "-5103/18656", 0, 0],
+         ["35/384", 0, "500/1113", "125/192", "-2187/6784", "11/84", 0]],
+        ["35/384", 0, "500/1113", "125/192", "-2187/6784", "11/84", 0],
+        [0, "1/5", "3/10", "4/5", "8/9", 1, 1], order=5),
+    e=tuple(Fr(x) for x in ("71/57600", "0", "-71/16695", "71/1920", "-17253/339200", "22/525",
+                            "-1/40")),
+    iord=5, expo=0.2 - 0.04 * 0.75, beta=0.04, fac1=0.2, fac2=10.0)
+
+# Runge-Kutta-Fehlberg 4(5), propagating the 4th-order solution ([B] §4.1 "RKF method").
+_RKF_B4 = ["25/216", 0, "1408/2565", "2197/4104", "-1/5", 0]
+_RKF_B5 = ["16/135", 0, "6656/12825", "28561/56430", "-9/50", "2/55"]
+RKF45 = Pair(
+    tab=tableau(
+        [[0] * 6, ["1/4"] + [0] * 5, ["3/32", "9/32"] + [0] * 4,
+         ["1932/2197", "-7200/2197", "7296/2197"] + [0] * 3,
+         ["439/216", -8, "3680/513", "-845/4104", 0, 0],
+         ["-8/27", 2, "-3544/2565", "1859/4104", "-11/40", 0]],
+        _RKF_B4, [0, "1/4", "3/8", "12/13", 1, "1/2"], order=4),
+    e=tuple(Fr(a) - Fr(b) for a, b in zip(_RKF_B4, _RKF_B5)), iord=5, expo=0.2)
+
+# Kutta-Merson 4("5"): estimate (h/30)(2k1 - 9k3 + 8k4 - k5)  ([B] §6 and §8 use Merson's method).
+MERSON = Pair(
+    tab=tableau(
+        [[0] * 5, ["1/3"] + [0] * 4, ["1/6", "1/6", 0, 0, 0], ["1/8", 0, "3/8", 0, 0],
+         ["1/2", 0, "-3/2", 2, 0]],
+        ["1/6", 0, 0, "2/3", "1/6"], [0, "1/3", "1/3", "1/2", 1], order=4),
+    e=tuple(Fr(x, 30) for x in (2, 0, -9, 8, -1)), iord=5, expo=0.2)
+
+# Dormand-Prince 8(5,3), as in Hairer's DOP853: 12 stages, then f(y1) as a 13th (FSAL) stage.
+_A = [[_fr(dop853_data.A[i, j]) for j in range(13)] for i in range(12)]
+_A.append([_fr(x) for x in dop853_data.B] + [Fr(0)])
+DOP853 = Pair(
+    tab=Tableau(tuple(tuple(r) for r in _A), tuple(_A[12]),
+                tuple(_fr(x) for x in dop853_data.C[:13]), order=8),
+    e=tuple(_fr(x) for x in dop853_data.E5), e3=tuple(_fr(x) for x in dop853_data.E3),
+    iord=8, expo=1.0 / 8.0, beta=0.0, fac1=0.333, fac2=6.0)
+
+
+def _error_lines(pair: Pair, n: int) -> list[str]:
+    """Scaled rms error of the step; DOP853 combines its 5th- and 3rd-order estimates."""
+    def comb(w, i):
+        return " + ".join(f"{lit(c)} * k{j}[{i}]" for j, c in enumerate(w) if c != 0)
+
+    lines = ["    acc = 0.0", "    acc3 = 0.0"]
+    for i in range(n):
+        lines.append(f"    sk = atol + rtol * max(abs(y[{i}]), abs(y1[{i}]))")
+        if pair.e3 is None:
+            lines.append(f"    acc += (h * ({comb(pair.e, i)}) / sk) ** 2")
+        else:
+            lines.append(f"    acc += (({comb(pair.e, i)}) / sk) ** 2")
+            lines.append(f"    acc3 += (({comb(pair.e3, i)}) / sk) ** 2")
+    if pair.e3 is None:
+        lines.append(f"    err = math.sqrt(acc / {n})")
+    else:  # DOP853: err = |h| err5^2 / sqrt(n (err5^2 + 0.01 err3^2))
+        lines += ["    deno = acc + 0.01 * acc3",
+                  "    if deno <= 0.0:", "        deno = 1.0",
+                  f"    err = abs(h) * acc / math.sqrt(deno * {n})"]
+    return lines
+
+
+def generate_adaptive(pair: Pair):
+    def generate(ctx) -> str:
+        n, s, tab = ctx.n, pair.tab.stages, pair.tab
+        body = ["\n@njit(cache=True)\ndef step_err(y, h, par, k0, rtol, atol):"]
+        count = s - 1 if pair.fsal else s
+        lines, arities = stage_lines(tab, count, first="k0")
+        body += lines
+        body.append(f"    y1 = {combination(tab.b, arities)}")
+        if pair.fsal:
+            body.append(f"    k{s - 1} = f(y1, par)")
+            knew = f"k{s - 1}"
+        else:
+            knew = "k0"                      # not FSAL: the driver evaluates f(y1) once accepted
+        body += _error_lines(pair, n)
+        body.append(f"    return y1, err, {knew}")
+        comma = "," if n == 1 else ""
+        shift = ", ".join(f"y[{i}] + h * v[{i}]" for i in range(n))
+        consts = (f"\nFSAL = {pair.fsal}\nSTAGES_NEW = {float(s - 1)!r}\nIORD = {pair.iord}\n"
+                  f"EXPO = {pair.expo!r}\nBETA = {pair.beta!r}\nSAFE = {pair.safe!r}\n"
+                  f"FAC1 = {pair.fac1!r}\nFAC2 = {pair.fac2!r}\n"
+                  f"\n@njit(cache=True)\ndef to_tuple_shift(y, h, v):\n    return ({shift}{comma})\n")
+        return (consts + helpers(n, arities) + "\n".join(body) + "\n"
+                + template(adaptive.initial_step) + template(adaptive.integrate_adaptive))
+    return generate
+
+
+def _generate(pair: Pair):
+    fixed, adaptive_ = generate_erk(pair.tab), generate_adaptive(pair)
+
+    def generate(ctx) -> str:
+        src = fixed(ctx)
+        if ctx.values.get("adaptive"):
+            src += adaptive_(ctx)
+        return src
+    return generate
+
+
+def _params(adaptive_default: bool, rtol: float):
+    only = ("adaptive", True)
+    return (
+        Param("adaptive", adaptive_default, "adaptive step size (else fixed step h)", kind="bool"),
+        Param("h", 0.01, "step size (fixed-step mode)", low=0.0, low_open=True,
+              only_if=("adaptive", False)),
+        Param("rtol", rtol, "relative tolerance", low=0.0, low_open=True, only_if=only),
+        Param("atol", rtol, "absolute tolerance", low=0.0, low_open=True, only_if=only),
+        Param("h0", 0.0, "initial step (0: Hairer's HINIT heuristic)", low=0.0, only_if=only,
+              show_default=False),
+        Param("hmax", 0.0, "maximal step (0: the whole interval)", low=0.0, only_if=only,
+              show_default=False),
+        Param("max_steps", 100000, "maximal number of steps (Hairer's NMAX)", kind="int", low=1,
+              only_if=only, show_default=False),
+    )
+
+
+def embedded(id, pair, order, reference, doc, adaptive_default=True, rtol=1e-6):
+    return Method(id=id, family="embedded-rk", order=order, reference=reference, doc=doc,
+                  generate=_generate(pair), data=pair, params=_params(adaptive_default, rtol))
+
+
+merson = embedded("merson", MERSON, 4, "[B] §6, §8", "Kutta-Merson 4(5); fixed step by default",
+                  adaptive_default=False)
+rkf45 = embedded("rkf45", RKF45, 4, "[B] §4.1, §7", "Runge-Kutta-Fehlberg 4(5), adaptive")
+dopri5 = embedded("dopri5", DOPRI5, 5, "[B] §5; Hairer's DOPRI5", "Dormand-Prince 5(4), adaptive")
+dop853 = embedded("dop853", DOP853, 8, "Hairer's DOP853 (beyond the seeds)",
+                  "Dormand-Prince 8(5,3), adaptive")

@@ -1,0 +1,142 @@
+"""Adaptive driver (template): Hairer's step-size control as in DOPRI5/DOP853 (HNW I, §II.4).
+
+err = ||h Σ e_j k_j / sk||_rms with sk_i = atol + rtol max(|y_i|, |y1_i|) (DOP853: its combined
+3rd/5th-order estimate); accepted if err <= 1. New step h / fac, with
+fac = clip(err^EXPO / facold^BETA / SAFE, 1/FAC2, 1/FAC1); after a rejection the next step is not
+larger than the rejected one; |h| <= hmax; the last step lands exactly on t_end. The initial step is
+Hairer's HINIT heuristic when h0 = 0.
+
+The driver is resumable: its whole state lives in ``y_io`` (y, f(y)) and ``st`` so Python can empty
+a full output buffer and call again without changing a single operation (status 5).
+"""
+from __future__ import annotations
+
+import math
+
+from methods.kernels.free import (  # noqa: F401
+    BETA, EXPO, FAC1, FAC2, FSAL, IORD, SAFE, STAGES_NEW, N, f, post_step, step_err, store, to_tuple,
+    to_tuple_shift)
+
+
+def initial_step(y, fy, par, hmax, rtol, atol):
+    """Hairer's HINIT: a first guess from |y|/|f| and an estimate of the second derivative."""
+    dnf = 0.0
+    dny = 0.0
+    for i in range(N):
+        sk = atol + rtol * abs(y[i])
+        dnf += (fy[i] / sk) ** 2
+        dny += (y[i] / sk) ** 2
+    h = 1.0e-6 if (dnf <= 1.0e-10 or dny <= 1.0e-10) else math.sqrt(dny / dnf) * 0.01
+    h = min(h, hmax)
+    y1 = to_tuple_shift(y, h, fy)
+    f1 = f(y1, par)
+    der2 = 0.0
+    for i in range(N):
+        sk = atol + rtol * abs(y[i])
+        der2 += ((f1[i] - fy[i]) / sk) ** 2
+    der2 = math.sqrt(der2) / h
+    der12 = max(abs(der2), math.sqrt(dnf))
+    h1 = max(1.0e-6, abs(h) * 1.0e-3) if der12 <= 1.0e-15 else (0.01 / der12) ** (1.0 / IORD)
+    return min(100.0 * abs(h), h1, hmax)
+
+
+def integrate_adaptive(y_io, st, par, t_end, h0, hmax, rtol, atol, every, max_steps,
+                       out_t, out_y, out_c):
+    # st: t, h, facold, reject, nacc, nrej, nfev, started, last_row_step
+    y = to_tuple(y_io[0])
+    rows = out_t.shape[0]
+    row = 0
+    if st[7] == 0.0:
+        fy = f(y, par)
+        st[6] = 1.0
+        if h0 > 0.0:
+            st[1] = min(h0, hmax)
+        else:
+            st[1] = initial_step(y, fy, par, hmax, rtol, atol)
+            st[6] += 1.0
+        st[0] = 0.0
+        st[2] = 1.0e-4
+        st[7] = 1.0
+        out_t[0] = 0.0
+        store(y, out_y, 0)
+        out_c[0, 0] = 0.0
+        out_c[0, 1] = st[6]
+        out_c[0, 2] = 0.0
+        out_c[0, 3] = 0.0
+        row = 1
+    else:
+        fy = to_tuple(y_io[1])
+    t, h, facold = st[0], st[1], st[2]
+    reject = st[3] != 0.0
+    nacc, nrej, nfev = int(st[4]), int(st[5]), st[6]
+    status = 0
+    last = False
+    while True:
+        if row >= rows:
+            status = 5
+            break
+        if nacc + nrej >= max_steps:
+            status = 3
+            break
+        if 0.1 * abs(h) <= abs(t) * 2.220446049250313e-16 or not h > 0.0:
+            status = 4
+            break
+        if t + 1.01 * h - t_end > 0.0:
+            h = t_end - t
+            last = True
+        y1, err, f1 = step_err(y, h, par, fy, rtol, atol)
+        nfev += STAGES_NEW
+        fac11 = err ** EXPO
+        fac = fac11 / facold ** BETA
+        fac = max(1.0 / FAC2, min(1.0 / FAC1, fac / SAFE))
+        hnew = h / fac
+        if err <= 1.0:
+            facold = max(err, 1.0e-4)
+            nacc += 1
+            t = t_end if last else t + h
+            y2 = post_step(y1, par)
+            if FSAL and y2 == y1:
+                fy = f1
+            else:
+                fy = f(y2, par)
+                nfev += 1.0
+            y = y2
+            if abs(hnew) > hmax:
+                hnew = hmax
+            if reject:
+                hnew = min(abs(hnew), abs(h))
+            reject = False
+            if nacc % every == 0 or last:
+                out_t[row] = t
+                store(y, out_y, row)
+                out_c[row, 0] = nacc
+                out_c[row, 1] = nfev
+                out_c[row, 2] = 0.0
+                out_c[row, 3] = nrej
+                row += 1
+                st[8] = nacc
+            if last:
+                break
+            h = hnew
+        else:
+            hnew = h / min(1.0 / FAC1, fac11 / SAFE)
+            reject = True
+            if nacc >= 1:
+                nrej += 1
+            last = False
+            h = hnew
+    if status in (3, 4) and nacc > st[8]:
+        if row < rows:
+            out_t[row] = t
+            store(y, out_y, row)
+            out_c[row, 0] = nacc
+            out_c[row, 1] = nfev
+            out_c[row, 2] = 0.0
+            out_c[row, 3] = nrej
+            row += 1
+    store(y, y_io, 0)
+    store(fy, y_io, 1)
+    st[0], st[1], st[2] = t, h, facold
+    st[3] = 1.0 if reject else 0.0
+    st[4], st[5], st[6] = nacc, nrej, nfev
+    return status, row
