@@ -1,5 +1,19 @@
 """The problem registry: one line per problem. A new problem is one file plus one line here."""
-from problems import double_oscillator, harmonic_oscillator, kepler_2d, lotka_volterra, pendulum
+from problems import (
+    double_oscillator,
+    euler_so4,
+    gavrilov_shilnikov,
+    gavrilov_shilnikov_modified,
+    geodesic_genus2,
+    harmonic_oscillator,
+    henon_heiles,
+    kepler_2d,
+    kepler_3d,
+    kepler_radial,
+    lotka_volterra,
+    outer_solar_system,
+    pendulum,
+)
 
 REGISTRY = {m.PROBLEM.id: m.PROBLEM for m in (
     harmonic_oscillator,
@@ -7,4 +21,12 @@ REGISTRY = {m.PROBLEM.id: m.PROBLEM for m in (
     pendulum,
     kepler_2d,
     lotka_volterra,
+    kepler_radial,
+    kepler_3d,
+    outer_solar_system,
+    henon_heiles,
+    gavrilov_shilnikov,
+    gavrilov_shilnikov_modified,
+    euler_so4,
+    geodesic_genus2,
 )}

@@ -153,11 +153,14 @@ def _function(name, ys, ps, exprs, kind, shape=None, comment=None):
     elif kind == "tuple":
         body = ", ".join(_num(printer, e) for e in reduced)
         lines.append(f"    return ({body}{',' if len(reduced) == 1 else ''})")
-    else:
+    else:  # zero-fill once, then only the structurally non-zero entries (N=36: compile 19 s -> 4 s)
         n, m = shape
+        lines.append("    M[:, :] = 0.0")
         for i in range(n):
             for j in range(m):
-                lines.append(f"    M[{i}, {j}] = {_num(printer, reduced[i * m + j])}")
+                e = reduced[i * m + j]
+                if not (e.is_number and e == 0):
+                    lines.append(f"    M[{i}, {j}] = {_num(printer, e)}")
     return lines
 
 
