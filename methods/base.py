@@ -82,7 +82,9 @@ class Modifier:
     runtime: Callable
     runtime_size: Callable
     needs_independent: bool = False    # [B] §2: rank D_H = q on Γ, else D_H D_Hᵀ is singular
+    kind: str = "field"                # "field": adds a term to F; "step": maps each step's result
 
     def describe(self) -> dict:
         return {"id": self.id, "reference": self.reference, "doc": self.doc, "kind": "modifier",
+                "acts_on": self.kind,
                 "params": [p.describe() for p in self.params]}

@@ -50,10 +50,10 @@ def _resolve(kind):
             raise UserError(f"{kind}: integral listed twice in on={'/'.join(on)}")
         out = dict(values, on=tuple(on))
         q = len(on)
-        if kind == "observer":
-            _check_independent(problem, names, on)
+        if kind in ("observer", "projection"):
+            _check_independent(problem, names, on, kind)
         for key in ("theta", "alpha", "beta", "H0"):
-            v = out[key]
+            v = out.get(key)
             if v is None:
                 continue
             if len(v) == 1:
@@ -66,7 +66,7 @@ def _resolve(kind):
     return resolve
 
 
-def _check_independent(problem, names, on) -> None:
+def _check_independent(problem, names, on, kind) -> None:
     """[B] §2 assumes rank D_H = q on Γ; refuse observed integrals that are dependent at y0."""
     import numpy as np
 
@@ -79,7 +79,7 @@ def _check_independent(problem, names, on) -> None:
     sv = np.linalg.svd(D, compute_uv=False)
     if not np.all(np.isfinite(sv)) or sv[0] == 0.0 or sv[-1] <= 1e-10 * sv[0]:
         raise UserError(
-            f"observer: the observed integrals {'/'.join(on)} of {problem.id} are not functionally "
+            f"{kind}: the integrals {'/'.join(on)} of {problem.id} are not functionally "
             f"independent at the initial point (rank D_H < {len(on)}, [B] §2); "
             f"observe an independent subset with on=...")
 

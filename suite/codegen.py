@@ -77,8 +77,12 @@ def field_source(ctx: Context, modifiers, offsets) -> str:
     parts = []
     terms = []
     jacs = []
+    projections = []
     for k, (mod, off) in enumerate(zip(modifiers, offsets)):
         parts.append(mod.record.generate(ctx, mod.values, k, off))
+        if mod.record.kind == "step":
+            projections.append(k)
+            continue
         terms.append(f"mod{k}_term(y, par)")
         jacs.append(f"    mod{k}_jac(y, par, J)")
     n = ctx.n
@@ -92,6 +96,10 @@ def field_source(ctx: Context, modifiers, offsets) -> str:
     parts.append(f"\n@njit(cache=True)\ndef f(y, par):\n{body}\n")
     parts.append("\n@njit(cache=True)\ndef fjac(y, par, J):\n    base_jac(y, par, J)\n"
                  + "\n".join(jacs) + "\n")
+    # step modifiers (projection) map each accepted step, in the order given
+    chain = "".join(f"    y, s = proj{k}(y, par)\n    if s != 0:\n        return y, s\n"
+                    for k in projections)
+    parts.append(f"\n@njit(cache=True)\ndef project(y, par):\n{chain}    return y, 0\n")
     return "".join(parts)
 
 
@@ -102,9 +110,10 @@ def module_source(problem, method_cfg) -> tuple[str, dict]:
 
     ptext, meta = problem_code(problem.record)
     mods = method_cfg.modifiers
-    ctx = Context(n=meta["n"], meta=meta, values=method_cfg.base.values, modified=bool(mods),
-                  explicit_u=meta["explicit_u"] and not mods,
-                  explicit_v=meta["explicit_v"] and not mods)
+    fields = [m for m in mods if m.record.kind == "field"]
+    ctx = Context(n=meta["n"], meta=meta, values=method_cfg.base.values, modified=bool(fields),
+                  explicit_u=meta["explicit_u"] and not fields,
+                  explicit_v=meta["explicit_v"] and not fields)
     offsets = []
     off = len(problem.record.model_params)
     for m in mods:

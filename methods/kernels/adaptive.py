@@ -14,7 +14,8 @@ from __future__ import annotations
 import math
 
 from methods.kernels.free import (  # noqa: F401
-    BETA, EXPO, FAC1, FAC2, FSAL, IORD, SAFE, STAGES_NEW, N, f, post_step, step_err, store, to_tuple,
+    BETA, EXPO, FAC1, FAC2, FSAL, IORD, SAFE, STAGES_NEW, N, f, post_step, project, step_err, store,
+    to_tuple,
     to_tuple_shift)
 
 
@@ -91,6 +92,10 @@ def integrate_adaptive(y_io, st, par, t_end, h0, hmax, rtol, atol, every, max_st
         fac = max(1.0 / FAC2, min(1.0 / FAC1, fac / SAFE))
         hnew = h / fac
         if err <= 1.0:
+            y1, pst = project(y1, par)
+            if pst != 0:
+                status = pst
+                break
             facold = max(err, 1.0e-4)
             nacc += 1
             t = t_end if last else t + h
@@ -125,7 +130,7 @@ def integrate_adaptive(y_io, st, par, t_end, h0, hmax, rtol, atol, every, max_st
                 nrej += 1
             last = False
             h = hnew
-    if status in (3, 4) and nacc > st[8]:
+    if status in (2, 3, 4) and nacc > st[8]:
         if row < rows:
             out_t[row] = t
             store(y, out_y, row)

@@ -37,6 +37,10 @@ def integrate(y0, par, h, nsteps, h_last, every, out_t, out_y, out_c):
         if probe != 0.0:
             status = 1
             break
+        y1, st = project(y1, par)        # step modifiers (projection), or the identity
+        if st != 0:
+            status = st
+            break
         y = post_step(y1, par)           # identification map of the problem, or the identity
         done = i + 1
         if done % every == 0 or done == nsteps:
