@@ -1,18 +1,38 @@
 """The method and modifier registries: one line each. A new method is data in its family's file
 plus one line here."""
-from methods import explicit_rk, implicit_rk, modifiers, partitioned
+from methods import (compositions, embedded_rk, explicit_rk, external, implicit_rk, modifiers,
+                     partitioned, projection)
 
 METHODS = {m.id: m for m in (
     explicit_rk.euler,
     explicit_rk.rk4,
+    embedded_rk.merson,
+    embedded_rk.rkf45,
+    embedded_rk.dopri5,
+    embedded_rk.dop853,
     implicit_rk.implicit_euler,
     implicit_rk.implicit_midpoint,
+    implicit_rk.gauss4,
+    implicit_rk.gauss6,
     partitioned.symplectic_euler,
     partitioned.symplectic_euler_adjoint,
     partitioned.stormer_verlet,
+    compositions.yoshida4,
+    compositions.yoshida6,
+    compositions.yoshida8,
+    external.heyoka_taylor,
+    external.rebound_ias15,
+    external.rebound_whfast,
 )}
+
+ALIASES = {alias: m.id for m in METHODS.values() for alias in m.aliases}
+
+# The methods that run as compiled gnibench kernels; the external engines (methods/external.py)
+# have their own tests (tests/test_reference.py).
+COMPILED = {k: m for k, m in METHODS.items() if getattr(m, "run", None) is None}
 
 MODIFIERS = {m.id: m for m in (
     modifiers.observer,
     modifiers.penalty,
+    projection.projection,
 )}

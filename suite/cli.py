@@ -30,6 +30,10 @@ def _parser() -> argparse.ArgumentParser:
     s.add_argument("--every", type=int, default=1, help="sample every K steps (plus the final point)")
     s.add_argument("--format", choices=("csv", "json", "parquet"), default="csv")
     s.add_argument("-o", "--output", type=Path, help="output file (default: stdout)")
+    s.add_argument("--reference", metavar="REF",
+                   help="what global_error is measured against: exact | heyoka[:precision=double|"
+                        "long double|real128,tol=T] | rebound[:tol=T] (IAS15) | none "
+                        "(default: exact when the problem has one, else none)")
 
     ls = sub.add_parser("list", help="list problems or methods")
     ls.add_argument("what", choices=("problems", "methods"))
@@ -54,7 +58,8 @@ def _solve(a) -> int:
         raise UserError("--format parquet needs -o FILE (binary output is not written to stdout)")
     if a.output is not None and not a.output.parent.exists():
         raise UserError(f"bad -o {a.output}: directory {a.output.parent} does not exist")
-    result = solve(a.problem, a.method, steps=a.steps, t_end=a.t_end, every=a.every)
+    result = solve(a.problem, a.method, steps=a.steps, t_end=a.t_end, every=a.every,
+                   reference=a.reference)
     write_result(result, a.format, a.output, sys.stdout)
     if result.status != "ok":
         print(f"gnibench: {result.status}: {result.reason}", file=sys.stderr)

@@ -27,7 +27,7 @@ from typing import Any
 
 from suite.cache import cache_dir
 
-STATUS = {0: "ok", 1: "nonfinite", 2: "newton_failed"}
+STATUS = {0: "ok", 1: "nonfinite", 2: "newton_failed", 3: "max_steps", 4: "step_too_small"}
 
 
 @dataclass

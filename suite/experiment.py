@@ -240,7 +240,7 @@ def with_options(spec: str, target: str, options: dict[str, str]) -> str:
 
 
 def _expand(group: dict, gi: int, defaults: dict, where: str, first_id: int) -> list[Cell]:
-    from suite.solve import grid, prepare
+    from suite.solve import grid, grid_step, prepare
 
     _keys(group, GROUP_KEYS, where)
     label = _text(group, "label", where)
@@ -262,7 +262,7 @@ def _expand(group: dict, gi: int, defaults: dict, where: str, first_id: int) -> 
                 mspec = _apply(mgiven, method_vary, mvals)
                 here = f"{where}: {pspec} {mspec}"
                 problem, method = prepare(pspec, mspec)
-                h = float(method.base.values["h"])
+                h = grid_step(method)
                 nsteps, h_last = grid(h, steps, t_end)
             except UserError as e:
                 raise UserError(f"{here}: {e}") from None

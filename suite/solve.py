@@ -38,6 +38,7 @@ class Result:
     h: float
     y0: tuple[float, ...]
     meta: dict = field(default_factory=dict)
+    rejected: np.ndarray | None = None      # cumulative rejected steps (adaptive methods)
 
 
 def grid(h: float, steps: int | None, t_end: float | None) -> tuple[int, float]:
@@ -58,16 +59,45 @@ def grid(h: float, steps: int | None, t_end: float | None) -> tuple[int, float]:
     return n, t_end - (n - 1) * h
 
 
-def _check_independent(mod, idx, y0, par, modifier, problem) -> None:
-    """[B] §2 assumes rank D_H = q on Γ; refuse observed integrals that are dependent at y0."""
-    D = np.array([getattr(mod, f"grad_{k}")(tuple(y0), par) for k in idx])
-    sv = np.linalg.svd(D, compute_uv=False)
-    if sv[0] == 0.0 or sv[-1] <= 1e-10 * sv[0]:
-        on = "/".join(modifier.values["on"])
-        raise UserError(
-            f"{modifier.id}: the observed integrals {on} of {problem.id} are not functionally "
-            f"independent at the initial point (rank D_H < {len(idx)}, [B] §2); "
-            f"observe an independent subset with on=...")
+@dataclass(frozen=True)
+class SampleGrid:
+    """The sample times of a cell, as the compiled driver takes them.
+
+    ``nsteps`` steps of ``h`` (the last one ``h_last``) sampled every ``every`` steps plus the final
+    point, and t = 0. External adaptive engines land on the same times (with ``h`` = dt_out).
+    """
+
+    h: float
+    nsteps: int
+    h_last: float
+    every: int
+
+    @property
+    def step(self) -> np.ndarray:
+        """Step index of each sample."""
+        idx = np.arange(0, self.nsteps + 1, self.every)
+        return idx if idx[-1] == self.nsteps else np.append(idx, self.nsteps)
+
+    @property
+    def t(self) -> np.ndarray:
+        k = self.step
+        return np.where(k < self.nsteps, k * self.h, (self.nsteps - 1) * self.h + self.h_last)
+
+
+def grid_step(method: MethodConfig) -> float:
+    """The option that spaces a method's grid: its step h, or dt_out for an adaptive engine."""
+    return float(method.base.values[getattr(method.base.record, "grid_param", "h")])
+
+
+def global_error(problem: Bound, t: np.ndarray, y: np.ndarray, ref) -> tuple[np.ndarray | None, dict]:
+    """Euclidean norm of y - reference at every sample, and the reference's provenance."""
+    if ref is None or len(t) == 0:
+        return None, {"backend": None}
+    from suite.reference import reference_solution
+
+    sol = reference_solution(problem, t, ref)
+    meta = {**ref.describe(), "cached": sol.cached, "seconds": sol.seconds}
+    return np.sqrt(np.sum((y - sol.y) ** 2, axis=1)), meta
 
 
 def versions() -> dict:
@@ -84,63 +114,155 @@ def prepare(problem_text: str, method_text: str) -> tuple[Bound, MethodConfig]:
 
 
 def solve(problem_text: str, method_text: str, steps: int | None = None,
-          t_end: float | None = None, every: int = 1) -> Result:
-    """Integrate one cell. Bad input raises UserError; divergence is a status, not an exception."""
+          t_end: float | None = None, every: int = 1, reference: str | None = None) -> Result:
+    """Integrate one cell. Bad input raises UserError; divergence is a status, not an exception.
+
+    ``reference`` chooses what ``global_error`` is measured against (:mod:`suite.reference`):
+    ``exact``, ``heyoka[:precision=...,tol=...]``, ``rebound[:tol=...]`` or ``none``; by default
+    the exact solution when the problem has one.
+    """
+    from suite.reference import default_reference, parse_reference
+
     problem, method = prepare(problem_text, method_text)
+    ref = (default_reference(problem.record) if reference is None
+           else parse_reference(reference, problem.record))
     if every < 1:
         raise UserError(f"bad --every {every}; allowed: an integer >= 1")
-    h = float(method.base.values["h"])
+    h = grid_step(method)
     nsteps, h_last = grid(h, steps, t_end)
-    rec = problem.record
-    y0 = rec.y0(problem.values)
-
-    t0 = time.perf_counter()
-    mod, meta, _ = load(problem, method)
-    ppar = np.array(rec.par(problem.values), dtype=np.float64)
-    names = tuple(meta["integrals"])
-    y0a = np.array(y0, dtype=np.float64)
-    h0_all = mod.invariants(tuple(y0), ppar) if names else ()
-    extra = []
-    for m in method.modifiers:
-        idx = [names.index(x) for x in m.values["on"]]
-        if m.record.needs_independent:
-            _check_independent(mod, idx, y0, ppar, m, problem)
-        extra.extend(m.record.runtime(m.values, [h0_all[k] for k in idx]))
-    par = np.concatenate([ppar, np.array(extra, dtype=np.float64)])
-    # warm-up: one step on scratch arrays loads (or compiles) every function of the cell
-    scratch = (np.empty(3), np.empty((3, rec.dim)), np.empty((3, 3)))
-    mod.integrate(y0a, par, h, 1, h, 1, *scratch)
-    compile_seconds = time.perf_counter() - t0
-
+    if getattr(method.base.record, "run", None) is not None:
+        return _solve_external(problem, method, SampleGrid(h, nsteps, h_last, every), ref)
+    cell = _compiled_cell(problem, method)
+    if method.base.values.get("adaptive"):
+        if t_end is None:
+            raise UserError(f"{method.base.id} with adaptive=true needs --t-end T (not --steps); "
+                            f"for fixed steps use {method.base.id}:adaptive=false,h=...")
+        return _solve_adaptive(problem, method, cell, float(t_end), every, ref)
+    mod, rec, par = cell.mod, problem.record, cell.par
+    y0a = np.array(cell.y0, dtype=np.float64)
     rows = 2 + nsteps // every + (1 if nsteps % every else 0)
-    out_t, out_y, out_c = np.empty(rows), np.empty((rows, rec.dim)), np.empty((rows, 3))
+    out_t, out_y, out_c = np.empty(rows), np.empty((rows, rec.dim)), np.zeros((rows, 4))
     t1 = time.perf_counter()
     code, done, nrows = mod.integrate(y0a, par, h, nsteps, h_last, every, out_t, out_y, out_c)
     wall = time.perf_counter() - t1
-
-    t, y, c = out_t[:nrows], out_y[:nrows], out_c[:nrows]
-    inv = np.empty((nrows, len(names)))
-    mod.eval_invariants(y, ppar, nrows, inv)
-    inv_err = inv - np.asarray(h0_all)[None, :]
-    gerr = None
-    if rec.exact is not None:
-        ex = rec.exact(t, y0, problem.values)
-        gerr = np.sqrt(np.sum((y - ex) ** 2, axis=1))
     status = STATUS[int(code)]
     reason = ""
     if status == "nonfinite":
         reason = f"state overflowed or became NaN at step {done + 1}"
     elif status == "newton_failed":
-        reason = (f"Newton did not converge in newton_maxit="
-                  f"{method.base.values.get('newton_maxit')} iterations at step {done + 1}")
-    misses = sum(sum(v.stats.cache_misses.values()) for v in vars(mod).values()
-                 if hasattr(v, "stats") and hasattr(v.stats, "cache_misses"))
+        reason = (f"Newton (or the projection) did not converge at step {done + 1}; raise "
+                  f"newton_maxit (now {method.base.values.get('newton_maxit', '-')}) or lower h")
+    return _result(problem, method, cell, out_t[:nrows], out_y[:nrows], out_c[:nrows], ref,
+                   status, reason, wall, h,
+                   {"nsteps": nsteps, "h_last": h_last, "every": every})
+
+
+@dataclass
+class _Cell:
+    mod: object
+    names: tuple[str, ...]
+    ppar: np.ndarray
+    par: np.ndarray
+    y0: tuple[float, ...]
+    h0_all: tuple
+    compile_seconds: float
+
+
+def _compiled_cell(problem: Bound, method: MethodConfig) -> _Cell:
+    """Load the cell's compiled module, build ``par`` (H0 and gains of the modifiers), warm up."""
+    rec = problem.record
+    y0 = rec.y0(problem.values)
+    t0 = time.perf_counter()
+    mod, meta, _ = load(problem, method)
+    ppar = np.array(rec.par(problem.values), dtype=np.float64)
+    names = tuple(meta["integrals"])
+    h0_all = mod.invariants(tuple(y0), ppar) if names else ()
+    extra = []
+    for m in method.modifiers:
+        idx = [names.index(x) for x in m.values["on"]]
+        extra.extend(m.record.runtime(m.values, [h0_all[k] for k in idx]))
+    par = np.concatenate([ppar, np.array(extra, dtype=np.float64)])
+    # warm-up: one step on scratch arrays loads (or compiles) every function of the cell
+    y0a = np.array(y0, dtype=np.float64)
+    if method.base.values.get("adaptive"):
+        st, y_io = np.zeros(9), np.array([y0a, np.zeros_like(y0a)])
+        mod.integrate_adaptive(y_io, st, par, 1.0, 0.0, 1.0, 1e-3, 1e-3, 1, 1,
+                               np.empty(2), np.empty((2, rec.dim)), np.zeros((2, 4)))
+    else:
+        mod.integrate(y0a, par, float(method.base.values.get("h", 0.01)), 1, 0.01, 1,
+                      np.empty(3), np.empty((3, rec.dim)), np.zeros((3, 4)))
+    return _Cell(mod, names, ppar, par, tuple(y0), tuple(h0_all), time.perf_counter() - t0)
+
+
+def _solve_adaptive(problem, method, cell, t_end, every, ref) -> Result:
+    """Adaptive embedded RK: the resumable driver fills fixed-size chunks until t_end."""
+    v, rec = method.base.values, problem.record
+    y_io = np.array([cell.y0, np.zeros(rec.dim)], dtype=np.float64)
+    st = np.zeros(9)
+    hmax = v["hmax"] if v["hmax"] > 0 else t_end
+    chunks, wall = [], 0.0
+    while True:
+        cap = 4096
+        out_t, out_y, out_c = np.empty(cap), np.empty((cap, rec.dim)), np.zeros((cap, 4))
+        t1 = time.perf_counter()
+        code, rows = cell.mod.integrate_adaptive(y_io, st, cell.par, t_end, v["h0"], hmax,
+                                                 v["rtol"], v["atol"], every, v["max_steps"],
+                                                 out_t, out_y, out_c)
+        wall += time.perf_counter() - t1
+        chunks.append((out_t[:rows].copy(), out_y[:rows].copy(), out_c[:rows].copy()))
+        if code != 5:
+            break
+    t, y, c = (np.concatenate([ch[i] for ch in chunks]) for i in range(3))
+    status = STATUS[int(code)]
+    reason = {"max_steps": f"more than max_steps={v['max_steps']} steps before t = {t_end:g}",
+              "step_too_small": f"step size underflow at t = {st[0]:.17g} (stiff, or diverging)",
+              "newton_failed": f"the projection did not converge at t = {st[0]:.17g}",
+              }.get(status, "")
+    return _result(problem, method, cell, t, y, c, ref, status, reason, wall, v["h0"],
+                   {"t_end": t_end, "every": every, "accepted": int(st[4]), "rejected": int(st[5])})
+
+
+def _result(problem, method, cell, t, y, c, ref, status, reason, wall, h, grid_meta) -> Result:
+    """Integrals, global error and provenance of a compiled cell's samples."""
+    mod, names, rec = cell.mod, cell.names, problem.record
+    inv = np.empty((len(t), len(names)))
+    mod.eval_invariants(y, cell.ppar, len(t), inv)
+    gerr, ref_meta = global_error(problem, t, y, ref)
+    misses = sum(sum(f.stats.cache_misses.values()) for f in vars(mod).values()
+                 if hasattr(f, "stats") and hasattr(f.stats, "cache_misses"))
     return Result(
         problem=problem.text(), method=method.text(), status=status, reason=reason,
-        state_names=rec.state, integral_names=names, t=t, y=y, invariant_errors=inv_err,
-        global_error=gerr, steps=c[:, 0].astype(np.int64), nfev=c[:, 1], njev=c[:, 2],
-        wall_seconds=wall, compile_seconds=compile_seconds, cache_misses=int(misses), h=h,
-        y0=tuple(y0),
-        meta={"versions": versions(), "nsteps": nsteps, "h_last": h_last, "every": every,
-              "seed": None, "H0": [float(x) for x in h0_all]},
+        state_names=rec.state, integral_names=names, t=t, y=y,
+        invariant_errors=inv - np.asarray(cell.h0_all)[None, :], global_error=gerr,
+        steps=c[:, 0].astype(np.int64), nfev=c[:, 1], njev=c[:, 2], rejected=c[:, 3],
+        wall_seconds=wall, compile_seconds=cell.compile_seconds, cache_misses=int(misses), h=h,
+        y0=cell.y0,
+        meta={"versions": versions(), **grid_meta, "seed": None,
+              "H0": [float(x) for x in cell.h0_all], "reference": ref_meta},
+    )
+
+
+def _solve_external(problem: Bound, method: MethodConfig, sg: SampleGrid, ref) -> Result:
+    """An external engine's cell: ``Method.run`` on the sample grid instead of the compiled driver."""
+    from suite.engines import problem_functions
+
+    rec = problem.record
+    y0 = rec.y0(problem.values)
+    fns = problem_functions(rec)
+    ppar = tuple(rec.par(problem.values))
+    names = tuple(fns.names)
+    h0_all = fns.invariants(tuple(y0), ppar) if names else ()
+    run = method.base.record.run(problem, method.base.values, sg)
+    t = sg.t[:len(run.y)]
+    inv = np.array([fns.invariants(tuple(row), ppar) for row in run.y]).reshape(len(t), len(names))
+    gerr, ref_meta = global_error(problem, t, run.y, ref)
+    return Result(
+        problem=problem.text(), method=method.text(), status=run.status, reason=run.reason,
+        state_names=rec.state, integral_names=names, t=t, y=run.y,
+        invariant_errors=inv - np.asarray(h0_all)[None, :], global_error=gerr, steps=run.steps,
+        nfev=np.asarray(run.nfev, dtype=float), njev=np.zeros(len(t)), wall_seconds=run.seconds,
+        compile_seconds=run.setup_seconds, cache_misses=0, h=sg.h, y0=tuple(y0),
+        meta={"versions": versions(), "nsteps": sg.nsteps, "h_last": sg.h_last, "every": sg.every,
+              "seed": None, "H0": [float(x) for x in h0_all], "reference": ref_meta,
+              "grid_param": method.base.record.grid_param, "engine": run.info},
     )

@@ -104,10 +104,11 @@ def parse_problem(text: str) -> Bound:
 
 def parse_method(text: str, problem: Bound | None = None) -> MethodConfig:
     """Resolve a METHOD spec; with a problem, modifiers and structure needs are checked against it."""
-    from methods import METHODS, MODIFIERS
+    from methods import ALIASES, METHODS, MODIFIERS
 
     parts = split_method(text)
     name, given = parse_item(parts[0], "method")
+    name = ALIASES.get(name, name)
     if name not in METHODS:
         if name in MODIFIERS:
             raise UserError(f"{name!r} is a modifier, not a base method; write e.g. rk4:h=0.01+{name}")

@@ -1,0 +1,223 @@
+"""Reference solutions: what ``global_error`` is measured against.
+
+Three backends:
+
+* ``exact``: the problem's exact solution (``Problem.exact``), evaluated in double. It is cheap and
+  not cached. Its accuracy is limited by double round-off in the phase, and that limit grows with t:
+  kepler-2d at t = 1000 periods is good to about 2e-11 (measured against a real128 reference).
+* ``heyoka``: Taylor integration of the problem's sympy model (:func:`suite.engines.heyoka_propagate`)
+  in double, long double or real128, with ``tol`` = the epsilon of the precision by default.
+* ``rebound``: IAS15 on N-body problems with a rebound adapter (:data:`suite.nbody.ADAPTERS`), in
+  double, with ``tol`` = IAS15's epsilon (rebound's default 1e-9).
+
+The integrated references are cached on disk under ``<cache>/references``. A file's key is the
+problem's canonical spec and source hash, a hash of the grid, the backend, precision, tolerance and
+engine version, so a second request for the same reference only reads the file. A reference spec
+uses the spec syntax, e.g. ``heyoka:precision=real128,tol=1e-30`` (see :func:`parse_reference`).
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import time
+from dataclasses import dataclass, field
+from importlib.metadata import version
+
+import numpy as np
+
+from suite.cache import cache_dir
+from suite.engines import epsilon, precision_name
+from suite.errors import UserError
+from suite.params import Param, bind
+from suite.spec import parse_item
+
+BACKENDS = ("exact", "heyoka", "rebound")
+FORMAT = 1                                     # bump when the cached content changes meaning
+
+_PRECISION = Param("precision", "double", "working precision", kind="str",
+                   choices=("double", "long double", "long-double", "real128"))
+SCHEMAS = {
+    "exact": (),
+    "heyoka": (_PRECISION, Param("tol", None, "Taylor tolerance (default: epsilon of the precision)",
+                                 low=0.0, low_open=True)),
+    "rebound": (Param("tol", None, "IAS15 epsilon (default: rebound's 1e-9)", low=0.0,
+                      low_open=True),),
+}
+
+
+@dataclass(frozen=True)
+class ReferenceSpec:
+    """A resolved reference choice: backend, precision and tolerance (None for exact)."""
+
+    backend: str
+    precision: str = "double"
+    tol: float | None = None
+
+    def text(self) -> str:
+        if self.backend == "exact":
+            return "exact"
+        opts = (f"precision={self.precision}," if self.backend == "heyoka" else "") + f"tol={self.tol!r}"
+        return f"{self.backend}:{opts}"
+
+    def describe(self) -> dict:
+        return {"backend": self.backend, "precision": self.precision, "tol": self.tol,
+                "spec": self.text()}
+
+
+@dataclass
+class ReferenceSolution:
+    """A reference on a grid: float64 samples and, above double, the full-precision ones."""
+
+    spec: ReferenceSpec
+    t: np.ndarray
+    y: np.ndarray
+    y_full: np.ndarray | None = None
+    cached: bool = False
+    seconds: float = 0.0
+    info: dict = field(default_factory=dict)
+
+
+def resolve(backend: str, precision: str = "double", tol: float | None = None,
+            problem=None) -> ReferenceSpec:
+    """Validate a reference choice (against a problem record, if given) and fill in defaults."""
+    if backend not in BACKENDS:
+        raise UserError(f"unknown reference {backend!r}; allowed: {'|'.join(BACKENDS)}|none")
+    precision = precision_name(precision)
+    if backend != "heyoka" and precision != "double":
+        raise UserError(f"reference {backend} runs in double only; precision={precision} "
+                        f"is for the heyoka reference")
+    if tol is not None and not (float(tol) > 0):
+        raise UserError(f"bad reference tol={tol}; allowed: a number > 0")
+    if problem is not None:
+        if backend == "exact" and problem.exact is None:
+            raise UserError(f"problem {problem.id} has no exact solution; use a heyoka reference "
+                            f"(--reference heyoka)")
+        if backend == "rebound":
+            from suite.nbody import adapter
+
+            adapter(problem)
+        if backend == "heyoka":
+            from suite.engines import check_heyoka
+
+            check_heyoka(problem)
+    if backend == "exact":
+        return ReferenceSpec("exact")
+    if tol is None:
+        tol = epsilon(precision) if backend == "heyoka" else 1e-9
+    return ReferenceSpec(backend, precision, float(tol))
+
+
+def parse_reference(text: str | None, problem=None) -> ReferenceSpec | None:
+    """Resolve a reference spec (``exact``, ``heyoka:precision=real128,tol=1e-30``, ``rebound``,
+    ``none``); None or ``none`` gives None."""
+    if text is None or str(text).strip().lower() == "none":
+        return None
+    name, given = parse_item(str(text), "reference")
+    if name not in BACKENDS:
+        raise UserError(f"unknown reference {name!r}; allowed: {'|'.join(BACKENDS)}|none")
+    values = bind(SCHEMAS[name], given, f"reference {name}")
+    return resolve(name, values.get("precision", "double"), values.get("tol"), problem)
+
+
+def default_reference(problem) -> ReferenceSpec | None:
+    """What global_error is measured against when nothing is chosen: the exact solution, if any."""
+    return ReferenceSpec("exact") if problem.exact is not None else None
+
+
+def _key(problem_bound, t: np.ndarray, spec: ReferenceSpec) -> str:
+    from problems.codegen import _source_hash
+
+    engine = {"heyoka": "heyoka", "rebound": "rebound"}[spec.backend]
+    doc = {"format": FORMAT, "problem": problem_bound.text(),
+           "source": _source_hash(problem_bound.record),
+           "grid": hashlib.sha256(np.ascontiguousarray(t, dtype=np.float64).tobytes()).hexdigest(),
+           "backend": spec.backend, "precision": spec.precision, "tol": repr(spec.tol),
+           "engine": f"{engine} {version(engine)}"}
+    return hashlib.sha256(json.dumps(doc, sort_keys=True).encode()).hexdigest()[:24]
+
+
+def cache_path(problem_bound, t: np.ndarray, spec: ReferenceSpec):
+    """The file that holds (or will hold) this reference."""
+    tag = spec.precision.replace(" ", "-")
+    return cache_dir("references") / f"{problem_bound.id}-{spec.backend}-{tag}-{_key(problem_bound, t, spec)}.npz"
+
+
+def _full_from_text(text: np.ndarray, precision: str) -> np.ndarray:
+    from suite.engines import fp_type
+
+    fp = fp_type(precision)
+    flat = [fp(s) for s in text.ravel()]
+    return np.array(flat).reshape(text.shape)
+
+
+def _read(path, spec: ReferenceSpec, t: np.ndarray) -> ReferenceSolution:
+    with np.load(path, allow_pickle=False) as z:
+        y = z["y"]
+        full = _full_from_text(z["y_full"], spec.precision) if "y_full" in z.files else None
+        info = json.loads(str(z["info"]))
+    return ReferenceSolution(spec, t, y, full, cached=True, info=info)
+
+
+def _write(path, sol: ReferenceSolution) -> None:
+    from suite.storage import atomic_write
+
+    arrays = {"t": sol.t, "y": sol.y, "info": np.array(json.dumps(sol.info, default=str))}
+    if sol.y_full is not None:
+        arrays["y_full"] = np.array([str(v) for v in sol.y_full.ravel()]).reshape(sol.y_full.shape)
+
+    def write(p):
+        with open(p, "wb") as f:
+            np.savez(f, **arrays)
+
+    atomic_write(path, write)
+
+
+def reference_solution(problem_bound, t_grid, backend: str | ReferenceSpec = "exact",
+                       precision: str = "double", tol: float | None = None) -> ReferenceSolution:
+    """The reference of a bound problem on ``t_grid`` (from the disk cache when possible).
+
+    Parameters
+    ----------
+    problem_bound:
+        A parsed problem (:func:`suite.spec.parse_problem`).
+    t_grid:
+        Sample times, increasing from 0.
+    backend, precision, tol:
+        See the module docstring; or pass a resolved :class:`ReferenceSpec` as ``backend``.
+    """
+    spec = backend if isinstance(backend, ReferenceSpec) else resolve(backend, precision, tol,
+                                                                       problem_bound.record)
+    t = np.ascontiguousarray(t_grid, dtype=np.float64)
+    rec = problem_bound.record
+    t0 = time.perf_counter()
+    if spec.backend == "exact":
+        y = np.asarray(rec.exact(t, rec.y0(problem_bound.values), problem_bound.values), float)
+        return ReferenceSolution(spec, t, y, None, seconds=time.perf_counter() - t0)
+    if t.ndim != 1 or len(t) == 0 or t[0] < 0 or np.any(np.diff(t) <= 0):
+        raise UserError("a reference grid must be a non-empty, increasing array of times >= 0")
+    path = cache_path(problem_bound, t, spec)
+    if path.exists():
+        sol = _read(path, spec, t)
+        sol.seconds = time.perf_counter() - t0
+        return sol
+    from suite.engines import heyoka_propagate
+    from suite.nbody import rebound_propagate
+
+    if spec.backend == "heyoka":
+        run = heyoka_propagate(problem_bound, t, spec.precision, spec.tol)
+    else:
+        run = rebound_propagate(problem_bound, t, "ias15", epsilon=spec.tol)
+    if run.status != "ok":
+        raise RuntimeError(f"reference {spec.text()} for {problem_bound.text()} failed: {run.reason}")
+    info = {**run.info, "steps": int(run.steps[-1]), "seconds": run.seconds,
+            "setup_seconds": run.setup_seconds, "problem": problem_bound.text(), **spec.describe()}
+    sol = ReferenceSolution(spec, t, run.y, run.y_full, cached=False, info=info)
+    _write(path, sol)
+    sol.seconds = time.perf_counter() - t0
+    return sol
+
+
+def reference(problem_bound, t_grid, backend: str = "exact", precision: str = "double",
+              tol: float | None = None) -> np.ndarray:
+    """The reference samples (float64, shape (len(t), N)); see :func:`reference_solution`."""
+    return reference_solution(problem_bound, t_grid, backend, precision, tol).y
