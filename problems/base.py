@@ -45,6 +45,22 @@ class Section:
 
 
 @dataclass(frozen=True)
+class Transform:
+    """A problem transform (e.g. K-S regularization): switched on by the boolean option ``option``.
+
+    ``to_transformed(y0, values) -> (values of ``problem``)`` gives the transformed problem's
+    option values (parameters and initial point); ``back(Z, values) -> (t, Y)`` maps its samples
+    to the original time and state, so every metric of the original problem applies unchanged.
+    """
+
+    option: str
+    problem: Any
+    to_transformed: Callable
+    back: Callable
+    doc: str = ""
+
+
+@dataclass(frozen=True)
 class Problem:
     """A self-describing problem record.
 
@@ -90,6 +106,7 @@ class Problem:
     notes: str = ""
     sections: tuple[Section, ...] = ()
     post_step: Callable | None = None
+    transform: Transform | None = None
     model_params: tuple[str, ...] = field(default=())
 
     def __post_init__(self):
@@ -114,6 +131,17 @@ class Problem:
 
     def validate(self, values: dict) -> None:
         """Hook for cross-parameter checks; raise UserError. Default: none."""
+
+    def transformed(self, values: dict):
+        """The Bound of the transformed problem when this problem's transform is switched on."""
+        if self.transform is None or not values.get(self.transform.option):
+            return None
+        from suite.spec import Bound
+
+        rec = self.transform.problem
+        tvalues = {p.name: p.default for p in rec.params}
+        tvalues.update(self.transform.to_transformed(self.y0(values), values))
+        return Bound(rec, tvalues)
 
     def par(self, values: dict) -> tuple[float, ...]:
         """The run-time parameter tuple for the compiled code (model parameters, in order)."""

@@ -17,7 +17,8 @@ import math
 
 import numpy as np
 
-from problems.base import Model, Problem, require
+from problems import kepler_ks
+from problems.base import Model, Problem, Transform, require
 from problems.kepler3d_exact import kepler_orbit_3d, state_from_elements
 from suite.params import Param
 
@@ -48,6 +49,24 @@ def exact(t, y0, values):
     y0 = np.asarray(y0, dtype=float)
     q, p = kepler_orbit_3d(y0[:3], y0[3:], np.asarray(t, dtype=float), values["mu"])
     return np.column_stack([q, p])
+
+
+def _to_ks(y0, values):
+    """Initial point and parameters of the K-S system [B] (5.4) for this orbit."""
+    q, p = np.asarray(y0[:3]), np.asarray(y0[3:])
+    u, v = kepler_ks.forward(q, p)
+    mu = values["mu"]
+    energy = (2 * v @ v - mu) / (u @ u)                                  # [B] (5.4)
+    init = dict(zip((f"{s}0" for s in kepler_ks.PROBLEM.state), [*u, *v, 0.0]))
+    return {"H": float(energy), "mu": mu, **{k: float(x) for k, x in init.items()}}
+
+
+def _from_ks(Z, values):
+    return kepler_ks.backward(Z)
+
+
+KS = Transform(option="ks", problem=kepler_ks.PROBLEM, to_transformed=_to_ks, back=_from_ks,
+               doc="K-S regularization [B] (5.4): integrate in fictitious time s (h, --t-end in s)")
 
 
 class Kepler3D(Problem):
@@ -81,10 +100,14 @@ PROBLEM = Kepler3D(
         Param("Omega", math.pi / 2, "longitude of the ascending node"),
         Param("omega", math.pi / 2, "argument of the pericenter"),
         Param("M0", 0.0, "mean anomaly of the initial point (0: pericenter)"),
+        Param("ks", False, "integrate the K-S regularized system [B] (5.4) in fictitious time s "
+              "(h and --t-end in s; results mapped back to (t, q, p))", kind="bool",
+              show_default=False),
     ),
     model=model,
     initial=initial,
     canonical=(("p1", "p2", "p3"), ("q1", "q2", "q3")),
     exact=exact,
     notes=NOTES,
+    transform=KS,
 )

@@ -16,7 +16,6 @@ Both return an :class:`EngineRun` on a given sample grid.
 """
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -72,25 +71,14 @@ class ProblemFunctions:
     invariants: Callable
 
 
-_functions: dict[str, ProblemFunctions] = {}
-
-
 def problem_functions(problem) -> ProblemFunctions:
-    """The first integrals of a problem record, from the same generated source as the kernels.
+    """The first integrals of a problem record, from the same generated source as the kernels
+    (:func:`problems.codegen.python_functions`), so external engines are judged by the very
+    expressions the compiled methods use."""
+    from problems.codegen import problem_meta, python_functions
 
-    The text of :func:`problems.codegen.problem_code` is executed with ``njit`` as the identity, so
-    the integrals external engines are judged by are the very expressions the compiled methods use.
-    """
-    from problems.codegen import problem_code
-
-    text, meta = problem_code(problem)
-    if text in _functions:
-        return _functions[text]
-    namespace = {"njit": lambda **kw: (lambda f: f), "math": math, "np": np}
-    exec(compile(text, f"<problem {problem.id}>", "exec"), namespace)  # noqa: S102 - our own codegen
-    fns = ProblemFunctions(tuple(meta["integrals"]), namespace["invariants"])
-    _functions[text] = fns
-    return fns
+    return ProblemFunctions(tuple(problem_meta(problem)["integrals"]),
+                            python_functions(problem)["invariants"])
 
 
 # ---------------------------------------------------------------------------------------------

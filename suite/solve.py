@@ -110,7 +110,8 @@ def versions() -> dict:
 def prepare(problem_text: str, method_text: str) -> tuple[Bound, MethodConfig]:
     """Parse and validate a cell's specs (raises UserError on bad input)."""
     problem = parse_problem(problem_text)
-    return problem, parse_method(method_text, problem)
+    target = problem.record.transformed(problem.values) or problem
+    return problem, parse_method(method_text, target)
 
 
 def solve(problem_text: str, method_text: str, steps: int | None = None,
@@ -130,8 +131,21 @@ def solve(problem_text: str, method_text: str, steps: int | None = None,
         raise UserError(f"bad --every {every}; allowed: an integer >= 1")
     h = grid_step(method)
     nsteps, h_last = grid(h, steps, t_end)
+    transformed = problem.record.transformed(problem.values)
     if getattr(method.base.record, "run", None) is not None:
+        if transformed is not None:
+            raise UserError(f"{method.base.id} is an external engine; it cannot integrate the "
+                            f"transformed system of {problem.id} (drop the transform option)")
         return _solve_external(problem, method, SampleGrid(h, nsteps, h_last, every), ref)
+    if transformed is not None:
+        return _solve_transformed(problem, transformed, method, steps, t_end, every, ref)
+    return _solve_bound(problem, method, steps, t_end, every, ref)
+
+
+def _solve_bound(problem: Bound, method: MethodConfig, steps, t_end, every, ref=None) -> Result:
+    """The compiled path for resolved specs (fixed step or adaptive)."""
+    h = grid_step(method)
+    nsteps, h_last = grid(h, steps, t_end)
     cell = _compiled_cell(problem, method)
     if method.base.values.get("adaptive"):
         if t_end is None:
@@ -239,6 +253,29 @@ def _result(problem, method, cell, t, y, c, ref, status, reason, wall, h, grid_m
         y0=cell.y0,
         meta={"versions": versions(), **grid_meta, "seed": None,
               "H0": [float(x) for x in cell.h0_all], "reference": ref_meta},
+    )
+
+
+def _solve_transformed(problem, transformed, method, steps, t_end, every, ref) -> Result:
+    """Integrate the transformed problem (e.g. K-S), then map its samples back to (t, y)."""
+    inner = _solve_bound(transformed, method, steps, t_end, every)
+    t, y = problem.record.transform.back(inner.y, problem.values)
+    original = parse_method("euler", problem)              # a cell whose module has the integrals
+    cell = _compiled_cell(problem, original)
+    inv = np.empty((len(t), len(cell.names)))
+    cell.mod.eval_invariants(np.ascontiguousarray(y), cell.ppar, len(t), inv)
+    gerr, ref_meta = global_error(problem, t, y, ref)
+    return Result(
+        problem=problem.text(), method=method.text(), status=inner.status, reason=inner.reason,
+        state_names=problem.record.state, integral_names=cell.names, t=t, y=y,
+        invariant_errors=inv - np.asarray(cell.h0_all)[None, :], global_error=gerr,
+        steps=inner.steps, nfev=inner.nfev, njev=inner.njev, rejected=inner.rejected,
+        wall_seconds=inner.wall_seconds, compile_seconds=inner.compile_seconds,
+        cache_misses=inner.cache_misses, h=inner.h, y0=cell.y0,
+        meta={**inner.meta, "H0": [float(x) for x in cell.h0_all], "reference": ref_meta,
+              "transform": {"option": problem.record.transform.option,
+                            "problem": transformed.text(), "s": inner.t.tolist()[-1:],
+                            "doc": problem.record.transform.doc}},
     )
 
 
