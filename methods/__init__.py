@@ -1,7 +1,15 @@
 """The method and modifier registries: one line each. A new method is data in its family's file
 plus one line here."""
-from methods import (compositions, embedded_rk, explicit_rk, external, implicit_rk, modifiers,
-                     partitioned, projection)
+from methods import (
+                     compositions,
+                     embedded_rk,
+                     explicit_rk,
+                     external,
+                     implicit_rk,
+                     modifiers,
+                     partitioned,
+                     projection,
+)
 
 METHODS = {m.id: m for m in (
     explicit_rk.euler,

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from fractions import Fraction as Fr
 
 import methods.dop853_coefficients as dop853_data
-from methods.base import H_PARAM, Method
+from methods.base import Method
 from methods.explicit_rk import combination, generate_erk, helpers, stage_lines
 from methods.kernels import adaptive
 from methods.tableau import Tableau, lit, tableau

@@ -182,6 +182,6 @@ def python_functions(problem) -> dict:
         import math
 
         namespace = {"math": math, "njit": lambda **kw: (lambda fn: fn)}
-        exec(compile(text, f"<{problem.id} python>", "exec"), namespace)
+        exec(compile(text, f"<{problem.id} python>", "exec"), namespace)  # noqa: S102 - our codegen
         _python[text] = namespace
     return _python[text]

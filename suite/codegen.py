@@ -130,7 +130,8 @@ def module_source(problem, method_cfg) -> tuple[str, dict]:
         post = "\n@njit(cache=True)\ndef post_step(y, par):\n    return y\n"
     body = [head, ptext, post, tuple_helpers(meta["n"]), template(linalg.lu_solve),
             template(newton.newton_done), field_source(ctx, mods, offsets),
-            method_cfg.base.record.generate(ctx), template(driver.integrate),
+            template(driver.record_row), method_cfg.base.record.generate(ctx),
+            template(driver.integrate),
             template(driver.eval_invariants)]
     return "\n".join(body), meta
 

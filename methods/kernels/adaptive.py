@@ -13,10 +13,25 @@ from __future__ import annotations
 
 import math
 
-from methods.kernels.free import (  # noqa: F401
-    BETA, EXPO, FAC1, FAC2, FSAL, IORD, SAFE, STAGES_NEW, N, f, post_step, project, step_err, store,
+from methods.kernels.free import (
+    BETA,
+    EXPO,
+    FAC1,
+    FAC2,
+    FSAL,
+    IORD,
+    SAFE,
+    STAGES_NEW,
+    N,
+    f,
+    post_step,
+    project,
+    record_row,
+    step_err,
+    store,
     to_tuple,
-    to_tuple_shift)
+    to_tuple_shift,
+)
 
 
 def initial_step(y, fy, par, hmax, rtol, atol):
@@ -58,12 +73,7 @@ def integrate_adaptive(y_io, st, par, t_end, h0, hmax, rtol, atol, every, max_st
         st[0] = 0.0
         st[2] = 1.0e-4
         st[7] = 1.0
-        out_t[0] = 0.0
-        store(y, out_y, 0)
-        out_c[0, 0] = 0.0
-        out_c[0, 1] = st[6]
-        out_c[0, 2] = 0.0
-        out_c[0, 3] = 0.0
+        record_row(out_t, out_y, out_c, 0, 0.0, y, 0.0, st[6], 0.0, 0.0)
         row = 1
     else:
         fy = to_tuple(y_io[1])
@@ -112,12 +122,7 @@ def integrate_adaptive(y_io, st, par, t_end, h0, hmax, rtol, atol, every, max_st
                 hnew = min(abs(hnew), abs(h))
             reject = False
             if nacc % every == 0 or last:
-                out_t[row] = t
-                store(y, out_y, row)
-                out_c[row, 0] = nacc
-                out_c[row, 1] = nfev
-                out_c[row, 2] = 0.0
-                out_c[row, 3] = nrej
+                record_row(out_t, out_y, out_c, row, t, y, nacc, nfev, 0.0, nrej)
                 row += 1
                 st[8] = nacc
             if last:
@@ -130,15 +135,9 @@ def integrate_adaptive(y_io, st, par, t_end, h0, hmax, rtol, atol, every, max_st
                 nrej += 1
             last = False
             h = hnew
-    if status in (2, 3, 4) and nacc > st[8]:
-        if row < rows:
-            out_t[row] = t
-            store(y, out_y, row)
-            out_c[row, 0] = nacc
-            out_c[row, 1] = nfev
-            out_c[row, 2] = 0.0
-            out_c[row, 3] = nrej
-            row += 1
+    if status in (2, 3, 4) and nacc > st[8] and row < rows:
+        record_row(out_t, out_y, out_c, row, t, y, nacc, nfev, 0.0, nrej)
+        row += 1
     store(y, y_io, 0)
     store(fy, y_io, 1)
     st[0], st[1], st[2] = t, h, facold

@@ -1,12 +1,23 @@
 """The fixed-step driver (template): the compiled loop every cell runs.
 
-After each accepted step the problem's ``post_step`` (identity unless the problem has an
-identification map, e.g. [B] (8.3)-(8.4)) is applied. Samples every ``every`` steps plus the final point; stops at the first failed step (status 2 from
+After each accepted step the step modifiers (``project``) and the problem's ``post_step``
+(identity unless the problem has an identification map, e.g. [B] (8.3)-(8.4)) are applied.
+Samples every ``every`` steps plus the final point; stops at the first failed step (status 2 from
 Newton) or non-finite state (status 1), keeping every sample taken so far plus the last good point.
 """
 from __future__ import annotations
 
-from methods.kernels.free import N, invariants, make_ws, step, store, to_tuple
+from methods.kernels.free import N, invariants, make_ws, post_step, project, step, store, to_tuple
+
+
+def record_row(out_t, out_y, out_c, row, t, y, steps, nfev, njev, rejected):
+    """Write one sample: time, state and the cumulative counters."""
+    out_t[row] = t
+    store(y, out_y, row)
+    out_c[row, 0] = steps
+    out_c[row, 1] = nfev
+    out_c[row, 2] = njev
+    out_c[row, 3] = rejected
 
 
 def integrate(y0, par, h, nsteps, h_last, every, out_t, out_y, out_c):
@@ -14,11 +25,7 @@ def integrate(y0, par, h, nsteps, h_last, every, out_t, out_y, out_c):
     y = to_tuple(y0)
     nfev = 0.0
     njev = 0.0
-    out_t[0] = 0.0
-    store(y, out_y, 0)
-    out_c[0, 0] = 0.0
-    out_c[0, 1] = 0.0
-    out_c[0, 2] = 0.0
+    record_row(out_t, out_y, out_c, 0, 0.0, y, 0.0, 0.0, 0.0, 0.0)
     row = 1
     status = 0
     done = 0
@@ -44,19 +51,12 @@ def integrate(y0, par, h, nsteps, h_last, every, out_t, out_y, out_c):
         y = post_step(y1, par)           # identification map of the problem, or the identity
         done = i + 1
         if done % every == 0 or done == nsteps:
-            out_t[row] = done * h if done < nsteps else (nsteps - 1) * h + h_last
-            store(y, out_y, row)
-            out_c[row, 0] = done
-            out_c[row, 1] = nfev
-            out_c[row, 2] = njev
+            t = done * h if done < nsteps else (nsteps - 1) * h + h_last
+            record_row(out_t, out_y, out_c, row, t, y, done, nfev, njev, 0.0)
             row += 1
             last_row_step = done
     if status != 0 and done > last_row_step:
-        out_t[row] = done * h
-        store(y, out_y, row)
-        out_c[row, 0] = done
-        out_c[row, 1] = nfev
-        out_c[row, 2] = njev
+        record_row(out_t, out_y, out_c, row, done * h, y, done, nfev, njev, 0.0)
         row += 1
     return status, done, row
 

@@ -14,7 +14,7 @@ A = C = D = I_IDX = E_IDX = ()
 EXPLICIT = False
 f = fjac = to_tuple = shifted = store = _unbound
 lu_solve = newton_done = _unbound
-invariants = make_ws = step = post_step = project = step_err = to_tuple_shift = _unbound
+invariants = make_ws = step = post_step = project = record_row = step_err = to_tuple_shift = _unbound
 BETA = EXPO = FAC1 = FAC2 = SAFE = 0.0
 IORD = STAGES_NEW = 0
 FSAL = False
