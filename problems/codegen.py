@@ -19,7 +19,7 @@ import json
 import sys
 from types import SimpleNamespace
 
-from suite.cache import cache_dir
+from suite.cache import cache_dir, write_atomic
 
 
 def _source_hash(problem) -> str:
@@ -39,12 +39,8 @@ def problem_code(problem) -> tuple[str, dict]:
     if src_path.exists() and meta_path.exists():
         return src_path.read_text(), json.loads(meta_path.read_text())
     text, meta = _generate(problem)
-    tmp = src_path.with_suffix(".tmp")
-    tmp.write_text(text)
-    tmp.replace(src_path)
-    tmp = meta_path.with_suffix(".tmp")
-    tmp.write_text(json.dumps(meta))
-    tmp.replace(meta_path)
+    write_atomic(src_path, text)
+    write_atomic(meta_path, json.dumps(meta))
     return text, meta
 
 

@@ -13,3 +13,11 @@ def cache_dir(sub: str = "") -> Path:
     d = root / sub if sub else root
     d.mkdir(parents=True, exist_ok=True)
     return d
+
+
+def write_atomic(path: Path, text: str) -> None:
+    """Write text to path through a process-unique temporary file and an atomic rename, so that
+    concurrent writers (pytest-xdist, Dask workers) never expose a partial file."""
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    tmp.write_text(text)
+    tmp.replace(path)

@@ -25,7 +25,7 @@ import time
 from dataclasses import dataclass, field
 from typing import Any
 
-from suite.cache import cache_dir
+from suite.cache import cache_dir, write_atomic
 
 STATUS = {0: "ok", 1: "nonfinite", 2: "newton_failed", 3: "max_steps", 4: "step_too_small"}
 
@@ -149,9 +149,7 @@ def load(problem, method_cfg):
     d = cache_dir("kernels")
     path = d / f"cell_{key}.py"
     if not path.exists():
-        tmp = path.with_suffix(".tmp")
-        tmp.write_text(text)
-        tmp.replace(path)
+        write_atomic(path, text)
     name = f"gnibench_cell_{key}"
     spec = importlib.util.spec_from_file_location(name, path)
     mod = importlib.util.module_from_spec(spec)
