@@ -15,7 +15,7 @@ def test_forward_back_maps_round_trip():
         q, p = rng.normal(size=3), rng.normal(size=3)
         u, v = kepler_ks.forward(q, p)
         assert abs(u[3] * v[0] - u[2] * v[1] + u[1] * v[2] - u[0] * v[3]) <= 1e-15 * (1 + np.abs(v).max())
-        t, y = kepler_ks.backward(np.array([[*u, *v, 0.0]]))
+        _, y = kepler_ks.backward(np.array([[*u, *v, 0.0]]))
         scale = 1 + np.abs(np.r_[q, p]).max()
         assert np.abs(y[0] - np.r_[q, p]).max() <= 4e-15 * scale
 
