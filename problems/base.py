@@ -45,6 +45,22 @@ class Section:
 
 
 @dataclass(frozen=True)
+class Boundary:
+    """The boundary of a fundamental domain, for engines that locate its crossings exactly.
+
+    The compiled methods apply ``Problem.post_step`` after a step that has left the domain; an
+    event-locating engine (heyoka) stops at the crossing itself and applies the identification of
+    the side crossed. ``sides(S)`` gives one sympy expression g_k per side, with the domain
+    {g_k > 0 for all k}; ``maps(S)`` gives, per side, the state (tuple of sympy expressions) to
+    which a point of side k is identified, the same map as ``post_step`` on that side.
+    """
+
+    sides: Callable[[Any], tuple]
+    maps: Callable[[Any], tuple]
+    reference: str = ""
+
+
+@dataclass(frozen=True)
 class Transform:
     """A problem transform (e.g. K-S regularization): switched on by the boolean option ``option``.
 
@@ -106,6 +122,7 @@ class Problem:
     notes: str = ""
     sections: tuple[Section, ...] = ()
     post_step: Callable | None = None
+    boundary: Boundary | None = None
     transform: Transform | None = None
     model_params: tuple[str, ...] = field(default=())
 

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 
-from problems.base import Model, Problem, require
+from problems.base import Boundary, Model, Problem, require
 from suite.params import Param
 
 BETA = math.pi / 8
@@ -86,6 +86,54 @@ def inside(q1: float, q2: float) -> bool:
     return 1 + w1 * w1 + w2 * w2 - 2 * SIDE_CENTRE * w1 > 0
 
 
+def _side_constants():
+    """Exact (sympy) R0, a, b of [B] §8.1, (8.3) and the centre distance of the side arcs."""
+    import sympy as sp
+
+    beta = sp.pi / 8
+    r0 = sp.sin(beta) / (sp.cos(beta) + sp.sqrt(sp.cos(2 * beta)))
+    return r0, 1 + 1 / r0**2, 1 - 1 / r0**2, (1 + r0**2) / (1 - r0**2)
+
+
+def _rotation(k):
+    import sympy as sp
+
+    return sp.cos(k * sp.pi / 4), sp.sin(k * sp.pi / 4)
+
+
+def boundary_sides(S):
+    """g_k = |q - c_k|^2 - rho^2 = 1 + |q|^2 - 2 C (q . e_k), k = 0..7: side k of Omega is the arc
+    of the circle of centre c_k = C e_k, e_k = (cos k pi/4, sin k pi/4), C = (1 + R0^2)/(1 - R0^2),
+    radius rho = sqrt(C^2 - 1) (orthogonal to the unit circle); Omega = {g_k > 0 for all k}."""
+    centre = _side_constants()[3]
+    out = []
+    for k in range(8):
+        ck, sk = _rotation(k)
+        out.append(1 + S.q1**2 + S.q2**2 - 2 * centre * (ck * S.q1 + sk * S.q2))
+    return tuple(out)
+
+
+def boundary_maps(S):
+    """Per side k, the state after the identification z -> rho gamma(conj(rho) z), rho = e^{ik pi/4},
+    with (8.3)-(8.4): the formulas of :func:`post_step` in octant k, without its inside test."""
+    _, a, b, _ = _side_constants()
+    out = []
+    for k in range(8):
+        ck, sk = _rotation(k)
+        w1 = ck * S.q1 + sk * S.q2
+        w2 = -sk * S.q1 + ck * S.q2
+        w_sq = w1**2 + w2**2
+        den = b**2 * w_sq + 2 * a * b * w1 + a**2
+        g1 = (a * b * w_sq + (a**2 + b**2) * w1 + a * b) / den                  # [B] (8.3)
+        g2 = (a**2 - b**2) * w2 / den
+        d1, d2 = b * w1 + a, b * w2                                            # [B] (8.4)
+        m1 = (d1**2 - d2**2) / (a**2 - b**2)
+        m2 = -2 * d1 * d2 / (a**2 - b**2)
+        out.append((ck * g1 - sk * g2, sk * g1 + ck * g2,
+                    S.p1 * m1 - S.p2 * m2, S.p1 * m2 + S.p2 * m1))
+    return tuple(out)
+
+
 def _q0(v) -> tuple[float, float]:
     q1 = v.get("q10") if v.get("q10") is not None else DEFAULT_Q[0]
     q2 = v.get("q20") if v.get("q20") is not None else DEFAULT_Q[1]
@@ -119,6 +167,7 @@ PROBLEM = GeodesicGenus2(
     initial=initial,
     canonical=(("p1", "p2"), ("q1", "q2")),
     post_step=post_step,
+    boundary=Boundary(boundary_sides, boundary_maps, "[B] §8.1, (8.3)-(8.4)"),
     notes="(choice) q0 = (0.2, 0.1), p0 of direction 1 rad with H0 = 1/2 ([B] picks them at random). "
           "After every step a point outside the octagon Omega is mapped back by (8.3)-(8.4) "
           "(post_step), which preserves H exactly.",

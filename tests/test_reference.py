@@ -214,8 +214,6 @@ def test_solve_reference_options():
     (["pendulum", "rebound-ias15"], "no rebound adapter"),
     (["kepler-2d", "heyoka-taylor+observer:on=H"], "modifiers"),
     (["kepler-2d", "heyoka-taylor:h=0.1"], "unknown option 'h'"),
-    (["geodesic-genus2", "heyoka-taylor"], "post_step"),
-    (["geodesic-genus2", "rk4", "--reference", "heyoka"], "post_step"),
 ])
 def test_cli_reference_and_external_errors(capsys, args, message):
     assert main(["solve", *args, "--steps", "3"]) == 2
