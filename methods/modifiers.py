@@ -9,6 +9,20 @@ norm"); with G = D_H D_Hᵀ it is ‖·‖² = Σ_b β_b² (G⁻¹)_bb, computed
 matrix. (choice) Normalized penalty, which [B] names but does not write out: by analogy,
 θ_i = α_i ‖D_Hᵀ L(β)‖⁻¹ = α_i (Σ_b β_b² ‖∇H_b‖²)^(-1/2).
 
+Partial first integrals [B] (2.12)-(2.13) (observer only): a q-partial first integral H_p with
+D_H F = L H_p, target Γ0 = {H_p = 0}. (reading) The OCR'd (2.13) writes the term as
+D_Hᵀ (D_H D_Hᵀ)⁻¹ [K − L] H; with D_H F = L H that gives d/dt H = +K H (growth), and for L = 0 it is
+not (PP) = (2.5) with H0 = 0, whose term is D_Hᵀ G⁻¹ K (H0 − H) = −D_Hᵀ G⁻¹ K H. The reading that
+reduces to (2.5) and for which "the Main Lemma and its proof remain valid word for word" is
+
+    ξ' = F + D_Hᵀ (D_H D_Hᵀ)⁻¹ [K (H0 − H) − L H],   H0 = 0,   so   d/dt H = L H − K H − L H = −K H.
+
+Ordinary and partial integrals may be observed together (one G over all observed rows, L = 0 on
+the rows of ordinary integrals): ``on=`` accepts both kinds of name; the canonical text lists the
+partial ones under ``partial=``. An observed set of partial integrals must be closed under L
+(L_ab = 0 for observed a, unobserved b), else it is not a q-partial first integral itself. The
+Jacobian's leading term is then −D_Hᵀ G⁻¹ (K + L) D_H.
+
 H0 is the value of the observed integrals at the initial point unless given. The generated code is
 unrolled over the q observed integrals (q is small), with the q x q system solved by Cholesky.
 For implicit methods the Jacobian of the term is its leading part, −D_Hᵀ G⁻¹ K D_H (observer) or
@@ -24,7 +38,10 @@ from suite.params import Param
 _COMMON = (
     Param("mode", "simple", "simple: constant gains theta; normalized: gains from alpha, beta",
           kind="str", choices=("simple", "normalized")),
-    Param("on", None, "observed integrals (default: all of the problem's)", kind="names"),
+    Param("on", (), "observed integrals, first integrals or partial first integrals [B] (2.12) "
+          "(default: all first integrals of the problem)", kind="names", show_default=False),
+    Param("partial", None, "observed partial first integrals, target H = 0 ([B] (2.13); observer "
+          "only; names given in on= are moved here)", kind="names"),
     Param("theta", (1.0,), "gains θ_i (one value, or one per observed integral)", kind="floats",
           low=0.0, low_open=True, only_if=("mode", "simple")),
     Param("alpha", (1.0,), "normalized gains α_i", kind="floats", low=0.0, low_open=True,
@@ -40,60 +57,99 @@ def _resolve(kind):
     def resolve(values, problem):
         from problems.codegen import problem_meta
 
-        names = problem_meta(problem.record)["integrals"]
-        on = values["on"] or tuple(names)
-        for name in on:
-            if name not in names:
+        meta = problem_meta(problem.record)
+        names, pnames = meta["integrals"], meta.get("partial_integrals", [])
+        given = tuple(values["on"] or ()) + tuple(values.get("partial") or ())
+        for name in given:
+            if name not in names and name not in pnames:
+                known = ", ".join(names + [f"{x} (partial)" for x in pnames])
                 raise UserError(f"{kind}: problem {problem.id} has no integral {name!r}; "
-                                f"its integrals: {', '.join(names)}")
-        if len(set(on)) != len(on):
-            raise UserError(f"{kind}: integral listed twice in on={'/'.join(on)}")
-        out = dict(values, on=tuple(on))
-        q = len(on)
+                                f"its integrals: {known}")
+        if len(set(given)) != len(given):
+            raise UserError(f"{kind}: integral listed twice in on={'/'.join(given)}")
+        on = tuple(x for x in given if x in names) if given else tuple(names)
+        partial = tuple(x for x in given if x in pnames)
+        if partial and kind != "observer":
+            raise UserError(f"{kind}: {'/'.join(partial)} of {problem.id} are partial first "
+                            "integrals; only the observer handles them ([B] (2.13))")
+        out = dict(values, on=on)
+        if "partial" in values:
+            out["partial"] = partial or None
+        q = len(on) + len(partial)
+        order = [given.index(x) for x in on + partial] if given else list(range(q))
+        if partial:
+            _check_closed(meta, partial, kind)
         if kind in ("observer", "projection"):
-            _check_independent(problem, names, on, kind)
+            _check_independent(problem, names, on, kind, partial)
         for key in ("theta", "alpha", "beta", "H0"):
             v = out.get(key)
             if v is None:
                 continue
+            size = len(on) if key == "H0" else q
+            if key == "H0" and not on:
+                raise UserError(f"{kind}: H0 is for first integrals; the target of the partial "
+                                f"integrals {'/'.join(partial)} is 0 ([B] (2.13))")
             if len(v) == 1:
-                v = v * q
-            if len(v) != q:
-                raise UserError(f"{kind}: {key} has {len(out[key])} values for {q} observed "
-                                f"integrals ({'/'.join(on)}); allowed: 1 or {q} values")
-            out[key] = tuple(v)
+                v = v * size
+            if len(v) != size:
+                what = "/".join(on if key == "H0" else given or on)
+                raise UserError(f"{kind}: {key} has {len(out[key])} values for {size} observed "
+                                f"integrals ({what}); allowed: 1 or {size} values")
+            out[key] = tuple(v) if key == "H0" else tuple(v[i] for i in order)
         return out
     return resolve
 
 
-def _check_independent(problem, names, on, kind) -> None:
+def _check_closed(meta, partial, kind) -> None:
+    """[B] (2.12) for the observed subset: D_H F = L H needs L_ab = 0 for unobserved b."""
+    pn = meta["partial_integrals"]
+    nz = meta["partial_L_nonzero"]
+    for a in partial:
+        for b, flag in zip(pn, nz[pn.index(a)]):
+            if flag and b not in partial:
+                raise UserError(f"{kind}: the derivative of {a} involves the partial integral {b} "
+                                f"(L[{a},{b}] != 0, [B] (2.12)); observe {b} too")
+
+
+def _check_independent(problem, names, on, kind, partial=()) -> None:
     """[B] §2 assumes rank D_H = q on Γ; refuse observed integrals that are dependent at y0."""
     import numpy as np
 
-    from problems.codegen import python_functions
+    from problems.codegen import problem_meta, python_functions
 
     fns = python_functions(problem.record)
     y0 = problem.record.y0(problem.values)
     par = problem.record.par(problem.values)
-    D = np.array([fns[f"grad_{names.index(x)}"](y0, par) for x in on], dtype=float)
+    pn = problem_meta(problem.record).get("partial_integrals", [])
+    rows = [fns[f"grad_{names.index(x)}"](y0, par) for x in on]
+    rows += [fns[f"pgrad_{pn.index(x)}"](y0, par) for x in partial]
+    D = np.array(rows, dtype=float)
     sv = np.linalg.svd(D, compute_uv=False)
     if not np.all(np.isfinite(sv)) or sv[0] == 0.0 or sv[-1] <= 1e-10 * sv[0]:
+        observed = "/".join(tuple(on) + tuple(partial))
         raise UserError(
-            f"{kind}: the integrals {'/'.join(on)} of {problem.id} are not functionally "
-            f"independent at the initial point (rank D_H < {len(on)}, [B] §2); "
+            f"{kind}: the integrals {observed} of {problem.id} are not functionally "
+            f"independent at the initial point (rank D_H < {len(rows)}, [B] §2); "
             f"observe an independent subset with on=...")
 
 
+def _observed(values):
+    """(first integrals, partial first integrals) observed by a resolved modifier."""
+    return tuple(values["on"]), tuple(values.get("partial") or ())
+
+
 def _runtime(values, h0_at_start):
-    """Numbers read from ``par``: H0 (q values), then theta, or alpha and beta."""
+    """Numbers read from ``par``: H0 (one per observed first integral), then theta, or alpha
+    and beta (one per observed integral, first integrals then partial ones)."""
     h0 = values["H0"] if values["H0"] is not None else tuple(h0_at_start)
     gains = values["theta"] if values["mode"] == "simple" else values["alpha"] + values["beta"]
-    return tuple(float(x) for x in h0 + gains)
+    return tuple(float(x) for x in tuple(h0) + tuple(gains))
 
 
 def _runtime_size(values):
-    q = len(values["on"])
-    return q + (q if values["mode"] == "simple" else 2 * q)
+    on, partial = _observed(values)
+    q = len(on) + len(partial)
+    return len(on) + (q if values["mode"] == "simple" else 2 * q)
 
 
 def _dot(a, b, n):
@@ -125,19 +181,26 @@ def _solve(q, rhs, out):
 
 
 def _prelude(kind, ctx, values, off):
-    """Common lines: gradients g_a, errors e_a = H0_a − H_a, gains th_a (and G, its factor)."""
+    """Common lines: gradients g_a, errors e_a = H0_a − H_a (−h_a for a partial integral, whose
+    target is 0), gains th_a (and G, its factor). Observed rows: first integrals, then partial."""
     names = ctx.meta["integrals"]
-    idx = [names.index(x) for x in values["on"]]
-    q, n = len(idx), ctx.n
+    pnames = ctx.meta.get("partial_integrals", [])
+    on, partial = _observed(values)
+    idx = [names.index(x) for x in on]
+    pidx = [pnames.index(x) for x in partial]
+    qo, q, n = len(idx), len(idx) + len(pidx), ctx.n
     lines = [f"g{a} = grad_{k}(y, par)" for a, k in enumerate(idx)]
+    lines += [f"g{qo + a} = pgrad_{k}(y, par)" for a, k in enumerate(pidx)]
     lines += [f"e{a} = par[{off + a}] - integral_{k}(y, par)" for a, k in enumerate(idx)]
+    lines += [f"e{qo + a} = -partial_{k}(y, par)" for a, k in enumerate(pidx)]
     if kind == "observer":
         lines += [f"G{a}{b} = {_dot(f'g{a}', f'g{b}', n)}" for a in range(q) for b in range(a + 1)]
         lines += _cholesky(q)
+    gain = off + qo
     if values["mode"] == "simple":
-        lines += [f"th{a} = par[{off + q + a}]" for a in range(q)]
+        lines += [f"th{a} = par[{gain + a}]" for a in range(q)]
     else:
-        beta = [f"par[{off + 2 * q + b}]" for b in range(q)]
+        beta = [f"par[{gain + q + b}]" for b in range(q)]
         if kind == "observer":
             # (G^-1)_bb from G x = e_b; Frobenius norm of D_H^T G^-1 L(beta)   [B] §2
             for b in range(q):
@@ -148,31 +211,46 @@ def _prelude(kind, ctx, values, off):
             norm2 = " + ".join(f"{beta[b]} * {beta[b]} * ({_dot(f'g{b}', f'g{b}', n)})"
                                for b in range(q))
         lines.append(f"inv_norm = 1.0 / math.sqrt({norm2})")
-        lines += [f"th{a} = par[{off + q + a}] * inv_norm" for a in range(q)]
-    return lines, q
+        lines += [f"th{a} = par[{gain + a}] * inv_norm" for a in range(q)]
+    # L of [B] (2.12) on the observed partial rows: lr{a}[j] = L_{a, j} (j: problem-level index)
+    lines += [f"lr{qo + a} = pl_{k}(y, par)" for a, k in enumerate(pidx)]
+    return lines, q, qo, pidx
+
+
+def _lmat(qo, q, pidx):
+    """Entries of the observed block of L as text, (a, b) -> expr, only for partial rows/columns."""
+    return {(a, b): f"lr{a}[{pidx[b - qo]}]" for a in range(qo, q) for b in range(qo, q)}
 
 
 def _generate(kind):
     def generate(ctx, values, k, off):
         n = ctx.n
-        pre, q = _prelude(kind, ctx, values, off)
+        pre, q, qo, pidx = _prelude(kind, ctx, values, off)
+        L = _lmat(qo, q, pidx)
+        # right-hand side of G x = K (H0 - H) - L H, [B] (2.5), (2.13) (reading in the docstring);
+        # with e = -H on the partial rows, -L H = L e
+        rhs = [f"th{a} * e{a}" + "".join(f" + {L[a, b]} * e{b}" for b in range(qo, q) if a >= qo)
+               for a in range(q)]
         if kind == "observer":
-            body = pre + _solve(q, [f"th{a} * e{a}" for a in range(q)], [f"x{a}" for a in range(q)])
+            body = pre + _solve(q, rhs, [f"x{a}" for a in range(q)])
         else:
             body = pre + [f"x{a} = th{a} * e{a}" for a in range(q)]
         comps = ", ".join(" + ".join(f"x{a} * g{a}[{i}]" for a in range(q)) for i in range(n))
-        term = (f"\n@njit(cache=True)\ndef mod{k}_term(y, par):\n    # {kind} [B] "
-                f"{'(2.5)' if kind == 'observer' else '(2.10)'}\n"
+        ref = ("(2.5)" + (", (2.13)" if q > qo else "")) if kind == "observer" else "(2.10)"
+        term = (f"\n@njit(cache=True)\ndef mod{k}_term(y, par):\n    # {kind} [B] {ref}\n"
                 + "".join(f"    {ln}\n" for ln in body)
                 + f"    return ({comps}{',' if n == 1 else ''})\n")
-        # Jacobian, leading term: -D_H^T W D_H with W = G^-1 K (observer) or K (penalty)
+        # Jacobian, leading term: -D_H^T W D_H with W = G^-1 (K + L) (observer) or K (penalty)
         jac = list(pre)
         if kind == "observer":
             for b in range(q):
                 unit = ["1.0" if i == b else "0.0" for i in range(q)]
                 jac += _solve(q, unit, [f"w{a}_{b}" for a in range(q)])
-            wsum = " + ".join(f"g{a}[i] * w{a}_{b} * th{b} * g{b}[j]"
-                              for a in range(q) for b in range(q))
+            for a in range(q):
+                for b in range(q):
+                    extra = "".join(f" + w{a}_{c} * {L[c, b]}" for c in range(qo, q) if b >= qo)
+                    jac.append(f"c{a}_{b} = w{a}_{b} * th{b}{extra}")
+            wsum = " + ".join(f"g{a}[i] * c{a}_{b} * g{b}[j]" for a in range(q) for b in range(q))
         else:
             wsum = " + ".join(f"g{a}[i] * th{a} * g{a}[j]" for a in range(q))
         jac += ["for i in range(N):", "    for j in range(N):", f"        J[i, j] -= {wsum}"]
@@ -188,6 +266,6 @@ def _modifier(kind, reference, doc):
                     runtime_size=_runtime_size, needs_independent=(kind == "observer"))
 
 
-observer = _modifier("observer", "[B] (2.5)-(2.6), normalized gains [B] §2",
+observer = _modifier("observer", "[B] (2.5)-(2.6), normalized gains [B] §2, partial integrals (2.13)",
                      "observer: makes the level set of the observed integrals attracting")
 penalty = _modifier("penalty", "[B] (2.10)", "penalty method: gradient pull towards the level set")

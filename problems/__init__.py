@@ -6,6 +6,7 @@ from problems import (
     gavrilov_shilnikov_modified,
     geodesic_genus2,
     harmonic_oscillator,
+    heavy_top_hess,
     henon_heiles,
     kepler_2d,
     kepler_3d,
@@ -29,4 +30,5 @@ REGISTRY = {m.PROBLEM.id: m.PROBLEM for m in (
     gavrilov_shilnikov_modified,
     euler_so4,
     geodesic_genus2,
+    heavy_top_hess,
 )}

@@ -23,6 +23,9 @@ class Model:
     integrals: dict[str, Any]
     hamiltonian: Any = None
     rhs: tuple | None = None
+    # q-partial first integrals [B] (2.12): name -> (h_k, row k of L); the row is one expression
+    # (diagonal entry L_kk) or a dict {partial name: L_kj}. D_H F = L H; Gamma_0 = {H = 0}.
+    partial_integrals: dict[str, tuple] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)

@@ -6,7 +6,9 @@ The generated text defines, with the state ``y`` a tuple of N floats and ``par``
 * ``base_jac(y, par, J)``               fills J (N x N array) with dF/dy, for Newton;
 * ``integral_<k>(y, par) -> float``     each first integral H_k;
 * ``grad_<k>(y, par) -> tuple``         its gradient, row k of D_H ([B] §2);
-* ``invariants(y, par) -> tuple``       all integrals.
+* ``invariants(y, par) -> tuple``       all integrals;
+* ``section_g_<j>``, ``section_grad_<j>``, ``section_cond_<j>`` (y, par): g, grad g and the crossing
+  condition of the problem's j-th Poincaré section (:mod:`suite.sections`).
 
 The text and a small JSON of metadata are cached on disk, keyed by the hash of the sources that
 produce them, so that a warm run never imports sympy.
@@ -88,6 +90,16 @@ def _generate(problem) -> tuple[str, dict]:
         grad = [sp.diff(H, y) for y in ys]
         out += _function(f"integral_{k}", ys, ps, [H], kind="scalar", comment=name)
         out += _function(f"grad_{k}", ys, ps, grad, kind="tuple", comment=f"gradient of {name}")
+    # Poincaré sections (problems.base.Section): g_j, its gradient and the direction condition
+    ns = SimpleNamespace(**{s: y for s, y in zip(problem.state, ys)},
+                         **{p: c for p, c in zip(problem.model_params, ps)})
+    for j, sec in enumerate(problem.sections):
+        g, cond = sp.sympify(sec.g(ns)), sp.sympify(sec.condition(ns))
+        out += _function(f"section_g_{j}", ys, ps, [g], kind="scalar", comment=f"section {sec.name}")
+        out += _function(f"section_grad_{j}", ys, ps, [sp.diff(g, y) for y in ys], kind="tuple",
+                         comment=f"gradient of g of section {sec.name}")
+        out += _function(f"section_cond_{j}", ys, ps, [cond], kind="scalar",
+                         comment=f"crossing condition (> 0) of section {sec.name}")
     calls = ", ".join(f"integral_{k}(y, par)" for k in range(len(names)))
     out += ["", "@njit(cache=True)", "def invariants(y, par):",
             f"    return ({calls}{',' if len(names) == 1 else ''})"]
@@ -102,7 +114,38 @@ def _generate(problem) -> tuple[str, dict]:
         # adjoint when b = F_v does not depend on v); true for separable H = T(p) + V(q).
         meta["explicit_u"] = all(sp.simplify(jac[i, j]) == 0 for i in ui for j in ui)
         meta["explicit_v"] = all(sp.simplify(jac[i, j]) == 0 for i in vi for j in vi)
+    out += _partial_functions(problem, ys, ps, meta)
     return "\n".join(out) + "\n", meta
+
+
+def _partial_functions(problem, ys, ps, meta) -> list[str]:
+    """q-partial first integrals [B] (2.12), D_H F = L H (only for problems that declare them).
+
+    Generates ``partial_<k>(y, par)`` (h_k), ``pgrad_<k>(y, par)`` (row k of D_H) and
+    ``pl_<k>(y, par)`` (row k of L, over all partial integrals); meta gets ``partial_integrals``
+    (names) and ``partial_L_nonzero`` (structure of L, to check that an observed subset is closed).
+    """
+    import sympy as sp
+
+    ns = SimpleNamespace(**{s: y for s, y in zip(problem.state, ys)},
+                         **{p: c for p, c in zip(problem.model_params, ps)})
+    partials = dict(problem.model(ns).partial_integrals)
+    if not partials:
+        return []
+    names = list(partials)
+    out, nonzero = [], []
+    for k, name in enumerate(names):
+        h, lrow = partials[name]
+        row = ([lrow.get(m, 0) for m in names] if isinstance(lrow, dict)
+               else [lrow if m == name else 0 for m in names])
+        row = [sp.sympify(x) for x in row]
+        nonzero.append([not (x.is_number and x == 0) for x in row])
+        out += _function(f"partial_{k}", ys, ps, [h], kind="scalar", comment=f"partial {name}")
+        out += _function(f"pgrad_{k}", ys, ps, [sp.diff(h, y) for y in ys], kind="tuple",
+                         comment=f"gradient of {name}")
+        out += _function(f"pl_{k}", ys, ps, row, kind="tuple", comment=f"row {name} of L")
+    meta["partial_integrals"], meta["partial_L_nonzero"] = names, nonzero
+    return out
 
 
 def _printer():

@@ -34,6 +34,9 @@ def _parser() -> argparse.ArgumentParser:
                    help="what global_error is measured against: exact | heyoka[:precision=double|"
                         "long double|real128,tol=T] | rebound[:tol=T] (IAS15) | none "
                         "(default: exact when the problem has one, else none)")
+    s.add_argument("--section", type=int, metavar="K",
+                   help="integrate until K crossings of the problem's Poincaré section (within "
+                        "--t-end / --steps) and write the section points (suite/sections.py)")
 
     ls = sub.add_parser("list", help="list problems or methods")
     ls.add_argument("what", choices=("problems", "methods"))
@@ -58,10 +61,26 @@ def _solve(a) -> int:
         raise UserError("--format parquet needs -o FILE (binary output is not written to stdout)")
     if a.output is not None and not a.output.parent.exists():
         raise UserError(f"bad -o {a.output}: directory {a.output.parent} does not exist")
+    if a.section is not None:
+        return _solve_section(a)
     result = solve(a.problem, a.method, steps=a.steps, t_end=a.t_end, every=a.every,
                    reference=a.reference)
     write_result(result, a.format, a.output, sys.stdout)
     if result.status != "ok":
+        print(f"gnibench: {result.status}: {result.reason}", file=sys.stderr)
+    return 0
+
+
+def _solve_section(a) -> int:
+    from suite.sections import solve_section, write_sections
+
+    if a.every != 1:
+        raise UserError("--every does not apply with --section (the section points are written)")
+    if a.reference is not None:
+        raise UserError("--reference does not apply with --section (no global error is written)")
+    result = solve_section(a.problem, a.method, a.section, steps=a.steps, t_end=a.t_end)
+    write_sections(result, a.format, a.output, sys.stdout)
+    if result.reason:
         print(f"gnibench: {result.status}: {result.reason}", file=sys.stderr)
     return 0
 

@@ -1,0 +1,321 @@
+"""Poincaré sections: ``gnibench solve PROBLEM METHOD (--t-end T | --steps N) --section K``.
+
+Design
+------
+1. *Samples.* The cell is integrated with a sample at every step (every = 1), in chunks, so that a
+   long horizon never holds the whole trajectory in memory and the run stops as soon as K crossings
+   have been found. Compiled fixed-step methods restart the driver from the last state of the
+   previous chunk (the drivers are one-step: the restart continues the same numerical trajectory);
+   compiled adaptive methods resume their driver state; external engines and transformed problems
+   (K-S) are solved once over the whole horizon with every = 1 and then scanned.
+2. *Detection.* A crossing of {g = 0} lies in (t_n, t_n+1] when g(y_n) > 0 >= g(y_n+1) or
+   g(y_n) < 0 <= g(y_n+1) (a sample exactly on the section belongs to the interval that ends there;
+   the initial point, often on the section, is never a crossing).
+3. *Location (Hénon 1982).* From the sample y_n before the crossing, the system is integrated with
+   g as the independent variable, dy/dg = F(y) / (grad g . F(y)), dt/dg = 1 / (grad g . F(y)), over
+   Delta g = -g(y_n), by DOP853 (order 8) with m equal substeps, m doubled from 2 until two
+   successive results agree to 1e-15 (relative). F is the field the method integrates: the compiled
+   cell's ``f``, i.e. the base field or the modified one (observer, penalty); for external engines
+   and transformed problems it is the base field of the problem. When g is a state coordinate (every
+   current section), dg/dg = 1 exactly, so g at the located point is 0 up to round-off; the
+   located |g| is reported (``meta.max_abs_g``).
+4. *Selection.* The crossing counts when ``condition(y*) > 0`` at the located point y*.
+
+Output columns: ``crossing`` (1, 2, ...), ``t``, ``chart`` (multi-chart sections, e.g. so(4)'s
+Gamma_k), the section coordinates, the remaining state components, and ``err_<integral>`` = H(y*) - H(y0).
+"""
+from __future__ import annotations
+
+import sys
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from suite.errors import UserError
+
+CHUNK = 8192                  # steps per chunk of the compiled drivers
+HENON_RTOL = 1e-15            # agreement of m and 2m DOP853 substeps
+HENON_MAX_SUBSTEPS = 4096
+
+
+@dataclass
+class SectionResult:
+    problem: str
+    method: str
+    status: str
+    reason: str
+    section: str
+    columns: dict             # name -> 1-D array, in output order
+    meta: dict = field(default_factory=dict)
+
+    def frame(self):
+        import pandas as pd
+
+        return pd.DataFrame(self.columns)
+
+
+# -- the section's functions ------------------------------------------------------------------------
+
+def section_of(rec, index: int = 0):
+    """The problem's section record and its generated functions (g, grad g, condition)."""
+    if not rec.sections:
+        raise UserError(f"{rec.id} has no Poincaré section; --section applies to problems with one "
+                        f"(see `gnibench list problems`)")
+    from problems.codegen import python_functions
+
+    fns = python_functions(rec)
+    return (rec.sections[index], fns[f"section_g_{index}"], fns[f"section_grad_{index}"],
+            fns[f"section_cond_{index}"], fns)
+
+
+def _g_values(g, Y: np.ndarray, par) -> np.ndarray:
+    """g at every row of Y: vectorized over columns when the expression allows it, else row-wise."""
+    try:
+        with np.errstate(all="ignore"):
+            v = np.asarray(g(tuple(Y.T), par), dtype=float)
+        if v.shape == (len(Y),):
+            return v
+    except TypeError:
+        pass
+    return np.array([g(tuple(row), par) for row in Y], dtype=float)
+
+
+def crossing_intervals(gv: np.ndarray) -> np.ndarray:
+    """Indices n with a crossing of g = 0 in (t_n, t_n+1]."""
+    a, b = gv[:-1], gv[1:]
+    return np.nonzero(((a > 0) & (b <= 0)) | ((a < 0) & (b >= 0)))[0]
+
+
+# -- Hénon's trick ----------------------------------------------------------------------------------
+
+def _dop853():
+    from methods.dop853_coefficients import N_STAGES, A, B, C
+
+    return A[:N_STAGES, :N_STAGES], np.asarray(B, dtype=float), C[:N_STAGES]
+
+
+def henon(y: np.ndarray, t: float, F, grad_g, g, par_g) -> tuple[np.ndarray, float, int]:
+    """Integrate (y, t) in the independent variable g from g(y) to 0: the point on the section.
+
+    ``F(y) -> array`` is the vector field, ``grad_g(y, par_g)`` the gradient of g. Returns the point,
+    its time and the number of DOP853 substeps used.
+    """
+    A, B, C = _dop853()
+    n = len(y)
+    dg_total = -g(tuple(y), par_g)
+
+    def rhs(z):
+        f = np.asarray(F(z[:n]), dtype=float)
+        d = float(np.dot(np.asarray(grad_g(tuple(z[:n]), par_g), dtype=float), f))
+        out = np.empty(n + 1)
+        out[:n] = f / d
+        out[n] = 1.0 / d
+        return out
+
+    def run(m):
+        z = np.append(np.asarray(y, dtype=float), t)
+        hs = dg_total / m
+        K = np.empty((len(C), n + 1))
+        for _ in range(m):
+            for i in range(len(C)):
+                K[i] = rhs(z + hs * (A[i, :i] @ K[:i]))
+            z = z + hs * (B @ K)
+        return z
+
+    if dg_total == 0.0:
+        return np.asarray(y, dtype=float), t, 0
+    m = 2
+    prev = run(m)
+    while m < HENON_MAX_SUBSTEPS:
+        m *= 2
+        cur = run(m)
+        if np.all(np.abs(cur - prev) <= HENON_RTOL * np.maximum(1.0, np.abs(cur))):
+            return cur[:n], float(cur[n]), m
+        prev = cur
+    return prev[:n], float(prev[n]), m
+
+
+# -- sample streams ---------------------------------------------------------------------------------
+
+def _fixed_chunks(cell, rec, h, nsteps, h_last):
+    """Yield (t, y, status, done) chunks of the compiled fixed-step driver, restarted per chunk."""
+    y = np.array(cell.y0, dtype=np.float64)
+    k0 = 0
+    while k0 < nsteps:
+        m = min(CHUNK, nsteps - k0)
+        last = k0 + m == nsteps
+        hl = h_last if last else h
+        out_t, out_y, out_c = np.empty(m + 2), np.empty((m + 2, rec.dim)), np.zeros((m + 2, 4))
+        code, done, rows = cell.mod.integrate(y, cell.par, h, m, hl, 1, out_t, out_y, out_c)
+        k = k0 + out_c[:rows, 0]
+        t = np.where(k < nsteps, k * h, (nsteps - 1) * h + h_last)
+        yield t, out_y[:rows].copy(), int(code), k0 + int(done)
+        if int(code) != 0:
+            return
+        y = out_y[rows - 1].copy()
+        k0 += m
+
+
+def _adaptive_chunks(cell, rec, v, t_end):
+    y_io = np.array([cell.y0, np.zeros(rec.dim)], dtype=np.float64)
+    st = np.zeros(9)
+    hmax = v["hmax"] if v["hmax"] > 0 else t_end
+    while True:
+        cap = CHUNK
+        out_t, out_y, out_c = np.empty(cap), np.empty((cap, rec.dim)), np.zeros((cap, 4))
+        code, rows = cell.mod.integrate_adaptive(y_io, st, cell.par, t_end, v["h0"], hmax,
+                                                 v["rtol"], v["atol"], 1, v["max_steps"],
+                                                 out_t, out_y, out_c)
+        t, y = out_t[:rows].copy(), out_y[:rows].copy()
+        yield t, y, (0 if code == 5 else int(code)), int(st[4])
+        if code != 5:
+            return
+
+
+# -- the command ------------------------------------------------------------------------------------
+
+def solve_section(problem_text: str, method_text: str, crossings: int, steps: int | None = None,
+                  t_end: float | None = None) -> SectionResult:
+    """Integrate until ``crossings`` crossings of the problem's first section (or the horizon)."""
+    from suite.codegen import STATUS
+    from suite.solve import _compiled_cell, grid, grid_step, prepare, solve
+
+    if crossings < 1:
+        raise UserError(f"bad --section {crossings}; allowed: an integer >= 1 (number of crossings)")
+    problem, method = prepare(problem_text, method_text)
+    rec = problem.record
+    sec, g, grad_g, cond, fns = section_of(rec)
+    ppar = tuple(float(x) for x in rec.par(problem.values))
+    h = grid_step(method)
+    nsteps, h_last = grid(h, steps, t_end)
+    external = getattr(method.base.record, "run", None) is not None
+    transformed = rec.transformed(problem.values) is not None
+    adaptive = bool(method.base.values.get("adaptive"))
+    t0 = time.perf_counter()
+    if external or transformed:
+        res = solve(problem_text, method_text, steps=steps, t_end=t_end, every=1, reference="none")
+        stream = iter([(res.t, res.y, 0 if res.status == "ok" else -1, len(res.t) - 1)])
+        status_of = {0: "ok", -1: res.status}.get
+        reason0 = res.reason
+
+        def F(y):
+            return fns["base_f"](tuple(y), ppar)
+
+        field_used = "base field of the problem"
+    else:
+        cell = _compiled_cell(problem, method)
+        if adaptive:
+            if t_end is None:
+                raise UserError(f"{method.base.id} with adaptive=true needs --t-end T (not --steps)")
+            stream = _adaptive_chunks(cell, rec, method.base.values, float(t_end))
+        else:
+            stream = _fixed_chunks(cell, rec, h, nsteps, h_last)
+
+        def status_of(c):
+            return STATUS[int(c)]
+        reason0 = ""
+        f_c, par_c = cell.mod.f, cell.par
+
+        def F(y):
+            return f_c(tuple(float(x) for x in y), par_c)
+
+        field_used = ("field integrated by the method (" +
+                      ("modified: " + "+".join(m.record.id for m in method.modifiers)
+                       if method.modifiers else "base") + ")")
+    y0 = rec.y0(problem.values)
+    inv = fns["invariants"]
+    H0 = np.asarray(inv(tuple(y0), ppar), dtype=float)
+
+    pts_t, pts_y, max_g, max_sub = [], [], 0.0, 0
+    prev = None                                  # last sample of the previous chunk
+    status, t_last = "ok", 0.0
+    for t, Y, code, _ in stream:
+        if prev is not None and len(t) and t[0] == prev[0][0]:
+            t, Y = t[1:], Y[1:]                  # the restart repeats the previous last sample
+        if prev is not None:
+            t = np.concatenate([prev[0], t])
+            Y = np.concatenate([prev[1], Y])
+        if len(t) == 0:
+            break
+        gv = _g_values(g, Y, ppar)
+        for n in crossing_intervals(gv):
+            ys, ts, m = henon(Y[n], float(t[n]), F, grad_g, g, ppar)
+            if not cond(tuple(ys), ppar) > 0:
+                continue
+            pts_t.append(ts)
+            pts_y.append(ys)
+            max_g = max(max_g, abs(g(tuple(ys), ppar)))
+            max_sub = max(max_sub, m)
+            if len(pts_t) == crossings:
+                break
+        t_last = float(t[-1])
+        if code != 0:
+            status = status_of(code)
+            break
+        if len(pts_t) == crossings:
+            break
+        prev = (t[-1:], Y[-1:])
+    wall = time.perf_counter() - t0
+    reason = ""
+    if status != "ok":
+        reason = reason0 or f"the integration stopped ({status}) at t = {t_last:.17g}"
+    elif len(pts_t) < crossings:
+        reason = (f"only {len(pts_t)} of {crossings} crossings of {sec.name} before "
+                  f"t = {t_last:.17g}; raise --t-end / --steps")
+    Yc = np.array(pts_y, dtype=float).reshape(len(pts_y), rec.dim)
+    cols = {"crossing": np.arange(1, len(pts_t) + 1), "t": np.array(pts_t, dtype=float)}
+    if sec.chart is not None:
+        cols["chart"] = (np.asarray(sec.chart(Yc), dtype=np.int64) if len(Yc)
+                         else np.zeros(0, dtype=np.int64))
+    order = list(sec.coords) + [s for s in rec.state if s not in sec.coords]
+    for s in order:
+        cols[s] = Yc[:, rec.state.index(s)]
+    integral_names = _integral_names(rec)
+    errs = (np.array([inv(tuple(r), ppar) for r in Yc], dtype=float).reshape(len(Yc), -1) - H0
+            if len(Yc) else np.zeros((0, len(integral_names))))
+    for k, name in enumerate(integral_names):
+        cols[f"err_{name}"] = errs[:, k]
+    from suite.solve import versions
+
+    meta = {"versions": versions(), "section": sec.name, "section_reference": sec.reference,
+            "crossings_requested": crossings, "crossings_found": len(pts_t),
+            "max_abs_g": max_g, "henon": {"integrator": "DOP853, m equal substeps in g",
+                                          "max_substeps": max_sub, "rtol": HENON_RTOL,
+                                          "field": field_used},
+            "wall_seconds": wall, "h": h, "nsteps": nsteps, "t_last_sample": t_last,
+            "y0": list(y0), "H0": H0.tolist(), "design": "suite/sections.py"}
+    return SectionResult(problem=problem.text(), method=method.text(), status=status,
+                         reason=reason, section=sec.name, columns=cols, meta=meta)
+
+
+def _integral_names(rec) -> tuple[str, ...]:
+    from problems.codegen import problem_meta
+
+    return tuple(problem_meta(rec)["integrals"])
+
+
+def write_sections(result: SectionResult, fmt: str, out, stdout=sys.stdout) -> None:
+    """Write the section points in csv, json or parquet (provenance as in suite.storage)."""
+    import json
+    from pathlib import Path
+
+    from suite.storage import _clean, atomic_write, write_parquet
+
+    df = result.frame()
+    meta = {"problem": result.problem, "method": result.method, "status": result.status,
+            "reason": result.reason, **result.meta}
+    if fmt == "csv":
+        if out is None:
+            df.to_csv(stdout, index=False)
+        else:
+            atomic_write(out, lambda p: df.to_csv(p, index=False))
+    elif fmt == "json":
+        doc = {"meta": meta, "columns": {c: [_clean(float(v)) for v in df[c]] for c in df.columns}}
+        text = json.dumps(doc, default=str)
+        if out is None:
+            stdout.write(text + "\n")
+        else:
+            atomic_write(out, lambda p: Path(p).write_text(text + "\n"))
+    else:
+        write_parquet(df, out, meta)

@@ -1,0 +1,151 @@
+"""Poincaré sections (suite/sections.py): crossings located by Hénon's trick to <= 1e-13.
+
+The harmonic oscillator q' = p, p' = -q from (q, p) = (0, 1) is (sin t, cos t): it crosses
+{q = 0, p > 0} at t = 2 pi k with p = 1. The test gives it a temporary section (a new id, so its
+generated code has the section functions). What is located is the crossing of the NUMERICAL orbit:
+the located point must be on the section (|q| <= 1e-13) and on the exact flow through the sample
+before it; only for a method with tiny global error is it also the exact crossing (2 pi k, p = 1).
+"""
+from __future__ import annotations
+
+import dataclasses
+import io
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import problems
+from problems import REGISTRY
+from problems.base import Section
+from suite.cli import main
+from suite.sections import crossing_intervals, solve_section
+from suite.solve import solve
+
+OSC_ID = "harmonic-oscillator-sec-test"
+P = f"{OSC_ID}:q0=0,p0=1"
+TOL = 1e-13
+
+
+@pytest.fixture
+def osc(monkeypatch):
+    rec = dataclasses.replace(
+        REGISTRY["harmonic-oscillator"], id=OSC_ID,
+        sections=(Section(name="q=0,p>0", g=lambda S: S.q, condition=lambda S: S.p,
+                          coords=("p",)),))
+    monkeypatch.setitem(problems.REGISTRY, OSC_ID, rec)
+    return rec
+
+
+def test_crossing_intervals_half_open():
+    # a sample exactly on the section belongs to the interval ending there; t = 0 is never one
+    assert crossing_intervals(np.array([0.0, -1.0, 1.0, 0.0, -2.0, -1.0])).tolist() == [1, 2]
+    assert crossing_intervals(np.array([1.0, 0.0, 1.0])).tolist() == [0]
+
+
+def test_exact_crossings_with_small_error(osc):
+    """rk4 with h = 5e-4 (global error ~1e-15 here): the crossings are t = 2 pi k, p = 1."""
+    r = solve_section(P, "rk4:h=0.0005", 3, t_end=25.0)
+    c = r.columns
+    assert r.status == "ok" and r.reason == ""
+    assert c["crossing"].tolist() == [1, 2, 3]
+    assert np.max(np.abs(c["q"])) <= TOL
+    assert np.max(np.abs(c["t"] - 2 * math.pi * np.arange(1, 4))) <= 1e-13
+    assert np.max(np.abs(c["p"] - 1.0)) <= 1e-13
+    assert list(c) == ["crossing", "t", "p", "q", "err_H"]
+    assert np.max(np.abs(c["err_H"] - ((c["p"] ** 2 + c["q"] ** 2) / 2 - 0.5))) <= 1e-15
+    assert r.meta["max_abs_g"] <= TOL
+
+
+def test_crossing_is_on_the_numerical_orbit(osc):
+    """rk4 with h = 0.1: the orbit is 1e-5 off the exact one; the located point is on the section
+    and on the exact flow through the sample before the crossing (not the exact crossing)."""
+    h = 0.1
+    r = solve_section(P, f"rk4:h={h}", 3, t_end=25.0)
+    c = r.columns
+    assert np.max(np.abs(c["q"])) <= TOL
+    assert np.max(np.abs(c["t"] - 2 * math.pi * np.arange(1, 4))) > 1e-7     # numerical, not exact
+    traj = solve(P, f"rk4:h={h}", t_end=25.0)
+    for k in range(3):
+        ts, ys = c["t"][k], np.array([c["q"][k], c["p"][k]])
+        n = math.floor(ts / h)
+        assert traj.t[n] <= ts <= traj.t[n + 1]
+        assert traj.y[n, 0] * traj.y[n + 1, 0] < 0
+        flow = osc.exact(np.array([ts - traj.t[n]]), traj.y[n], {})[0]
+        assert np.max(np.abs(flow - ys)) <= TOL
+
+
+def test_same_method_step_reproduces_the_point(osc):
+    """One rk4 step of the gap t* - t_n from the sample y_n lands on the located point."""
+    h = 1e-3
+    r = solve_section(P, f"rk4:h={h}", 1, t_end=7.0)
+    ts, ys = r.columns["t"][0], np.array([r.columns["q"][0], r.columns["p"][0]])
+    traj = solve(P, f"rk4:h={h}", t_end=7.0)
+    n = math.floor(ts / h)
+    q0, p0 = (float(x) for x in traj.y[n])
+    step = solve(f"{OSC_ID}:q0={q0!r},p0={p0!r}", f"rk4:h={float(ts - traj.t[n])!r}", steps=1)
+    assert np.max(np.abs(step.y[-1] - ys)) <= TOL
+
+
+@pytest.mark.parametrize("method", ["dop853:rtol=1e-12,atol=1e-12",      # adaptive driver
+                                    "gauss4:h=0.05",                       # implicit
+                                    "rk4:h=0.05+observer:theta=10"])       # modified field
+def test_every_kind_of_method_is_located(osc, method):
+    r = solve_section(P, method, 2, t_end=15.0)
+    c = r.columns
+    assert r.status == "ok" and len(c["t"]) == 2
+    assert np.max(np.abs(c["q"])) <= TOL and np.all(c["p"] > 0)
+    assert np.max(np.abs(c["t"] - 2 * math.pi * np.arange(1, 3))) <= 1e-3
+
+
+def test_fewer_crossings_than_asked(osc, capsys):
+    code = main(["solve", P, "rk4:h=0.01", "--t-end", "10", "--section", "3"])
+    out, err = capsys.readouterr()
+    assert code == 0
+    assert len(pd.read_csv(io.StringIO(out))) == 1
+    assert err.startswith("gnibench: ok: only 1 of 3 crossings")
+
+
+def _cli(argv, capsys):
+    code = main(argv)
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    return pd.read_csv(io.StringIO(out))
+
+
+def test_gavrilov_shilnikov_cli(capsys):
+    d = _cli(["solve", "gavrilov-shilnikov", "rk4:h=0.005", "--t-end", "10", "--section", "4"],
+             capsys)
+    assert list(d.columns) == ["crossing", "t", "q2", "p2", "q1", "p1", "err_H", "err_K"]
+    assert len(d) == 4
+    assert d.p1.abs().max() <= TOL and (d.p2 > 0).all()
+    # on the homoclinic loop the orbit crosses once per turn, 2 pi / omega = 1
+    assert np.abs(np.diff(d.t) - 1.0).max() < 1e-3
+
+
+def test_euler_so4_cli(capsys):
+    d = _cli(["solve", "euler-so4", "rk4:h=0.01", "--steps", "20000", "--section", "40"], capsys)
+    assert list(d.columns)[:5] == ["crossing", "t", "chart", "x5", "x6"]
+    assert {"x1", "x2", "x3", "x4", "err_H1", "err_H2", "err_H3"} <= set(d.columns)
+    assert len(d) == 40 and d.chart.between(1, 8).all() and d.chart.dtype.kind == "i"
+    assert d.x2.abs().max() <= TOL
+    lam = (1, 5, 2, 1, 3, 4)
+    x2dot = (lam[0] - lam[2]) * d.x1 * d.x3 + (lam[3] - lam[5]) * d.x4 * d.x6
+    assert (x2dot < 0).all()                        # the catalog's direction: x2' < 0
+
+
+def test_section_on_problem_without_one(capsys):
+    code = main(["solve", "harmonic-oscillator", "rk4", "--steps", "10", "--section", "2"])
+    out, err = capsys.readouterr()
+    assert code == 2 and out == ""
+    assert len(err.splitlines()) == 1 and err.startswith("gnibench: error:")
+    assert "no Poincaré section" in err
+
+
+@pytest.mark.parametrize("extra", [["--section", "0"], ["--section", "2", "--every", "5"],
+                                   ["--section", "2", "--reference", "none"]])
+def test_bad_section_options(capsys, extra):
+    code = main(["solve", "gavrilov-shilnikov", "rk4", "--steps", "10", *extra])
+    out, err = capsys.readouterr()
+    assert code == 2 and out == "" and len(err.splitlines()) == 1
