@@ -5,6 +5,15 @@ timing; each repeat integrates ``steps`` steps with ``every = steps`` (sampling 
 ns/step = wall / steps, reported as min and median over the repeats. The C reference
 (``bench_c/kepler.c``, ``gcc -O3 -ffp-contract=off``) performs the same floating-point operations
 in the same order, so the final states must agree to round-off. Target: numba/C <= 1.5.
+
+Adaptive part (``bench_adaptive``): dopri5 and dop853 on kepler-2d, rtol = atol = 1e-10, 100
+periods, Hairer's HINIT start, µs per attempted step (accepted + rejected). References: (a)
+``bench_c/kepler_adaptive.c``, a C port of the same driver, its unrolled step written from the
+same ``Pair`` record (``pair_header``): same operations, so the same step counts and final state
+(checked in the table and by tests/test_bench_adaptive.py);
+(b) ``scipy.integrate.solve_ivp`` (RK45 / DOP853, same tolerances, a plain Python right-hand
+side) over ``SCIPY_PERIODS`` periods, per step = wall / (nfev / evaluations per step).
+Targets: numba <= 1.3x C, and >= 100x faster than solve_ivp per step.
 """
 from __future__ import annotations
 
@@ -106,8 +115,10 @@ def startup(runs: int = 2) -> list[dict]:
     return rows
 
 
-def bench(steps: int = 2_000_000, with_c: bool = True) -> list[dict]:
-    """Print the table (and return its rows): numba vs C ns/step, ratio, agreement, startup."""
+def bench(steps: int = 2_000_000, with_c: bool = True, adaptive: bool = True,
+          with_scipy: bool = True) -> list[dict]:
+    """Print the tables (and return their rows): fixed step numba vs C ns/step, ratio, agreement;
+    adaptive dopri5/dop853 vs C and solve_ivp (``bench_adaptive``); startup."""
     if steps < 1:
         from suite.errors import UserError
 
@@ -141,6 +152,8 @@ def bench(steps: int = 2_000_000, with_c: bool = True) -> list[dict]:
             rows.append({"method": "c-sv-fsal", "c_ns_min": clo, "c_ns_median": cmed})
             print(f"issue's C reference machine: rk4 {C_REFERENCE_NS['rk4']:g} ns/step, "
                   f"sv {C_REFERENCE_NS['sv']:g} ns/step; agreement expected ~1e-12 (same operations)")
+    if adaptive:
+        rows.extend({"adaptive": True, **r} for r in bench_adaptive(with_c, with_scipy))
     runs = startup()
     second = runs[-1]
     ok = second["compile_seconds"] < 1.0
@@ -150,4 +163,198 @@ def bench(steps: int = 2_000_000, with_c: bool = True) -> list[dict]:
                       for i, r in enumerate(runs))
           + f"; second run under 1 s before integrating: {'yes' if ok else 'NO'}")
     rows.append({"startup": runs})
+    return rows
+
+
+# ---------------------------------------------------------------- adaptive (dopri5 / dop853)
+
+ADAPTIVE_TOL = 1e-10
+ADAPTIVE_PERIODS = 100
+SCIPY_PERIODS = 10
+ADAPTIVE_TARGET_C = 1.3
+ADAPTIVE_TARGET_SCIPY = 100.0
+ADAPTIVE_REPEATS = 25      # one run is a few ms: many repeats make the min robust to load
+ADAPTIVE_CELLS = (("dopri5", "RK45"), ("dop853", "DOP853"))  # (gnibench method, solve_ivp method)
+
+
+def adaptive_cell(method: str, tol: float = ADAPTIVE_TOL, problem: str = PROBLEM):
+    """(integrate_adaptive, y0, par, Pair) of a warmed-up adaptive cell; compile time excluded."""
+    from suite.codegen import load
+    from suite.solve import prepare
+
+    bound, cfg = prepare(problem, f"{method}:adaptive=true,rtol={tol!r},atol={tol!r}")
+    mod, _, _ = load(bound, cfg)
+    rec = bound.record
+    y0 = np.array(rec.y0(bound.values), dtype=np.float64)
+    par = np.array(rec.par(bound.values), dtype=np.float64)
+    run_adaptive(mod.integrate_adaptive, y0, par, 1.0, tol)      # warm-up
+    return mod.integrate_adaptive, y0, par, cfg.base.record.data
+
+
+def run_adaptive(integrate_adaptive, y0, par, t_end: float, tol: float = ADAPTIVE_TOL):
+    """One timed adaptive integration to t_end, sampled only at the end (h0 = 0: HINIT, hmax =
+    t_end): (seconds, accepted, rejected, nfev, final state)."""
+    y_io = np.array([y0, np.zeros_like(y0)])
+    st = np.zeros(9)
+    out_t, out_y, out_c = np.empty(4), np.empty((4, y0.size)), np.zeros((4, 4))
+    t0 = time.perf_counter()
+    status, rows = integrate_adaptive(y_io, st, par, t_end, 0.0, t_end, tol, tol, 1 << 60,
+                                      1 << 60, out_t, out_y, out_c)
+    dt = time.perf_counter() - t0
+    if status != 0:
+        raise RuntimeError(f"adaptive bench run stopped: status {status}")
+    return dt, int(st[4]), int(st[5]), float(st[6]), out_y[rows - 1].copy()
+
+
+def time_numba_adaptive(method: str, periods: int = ADAPTIVE_PERIODS,
+                        repeats: int = ADAPTIVE_REPEATS,
+                        tol: float = ADAPTIVE_TOL) -> dict:
+    integrate_adaptive, y0, par, pair = adaptive_cell(method, tol)
+    t_end = periods * 2 * math.pi
+    ts = []
+    for _ in range(repeats):
+        dt, nacc, nrej, nfev, y = run_adaptive(integrate_adaptive, y0, par, t_end, tol)
+        ts.append(dt * 1e6 / (nacc + nrej))
+    return {"us_min": min(ts), "us_median": statistics.median(ts), "accepted": nacc,
+            "rejected": nrej, "nfev": nfev, "y": y, "y0": y0, "pair": pair}
+
+
+def pair_header(pair, n: int = 4) -> str:
+    """The C header kepler_adaptive.c is compiled with: the pair's controller constants and its
+    ``step_err``, unrolled with constant coefficients as methods/embedded_rk.py writes the numba
+    one (same operations, same order: zero coefficients skipped, sums left to right)."""
+    tab, s = pair.tab, pair.tab.stages
+    if not pair.fsal:
+        raise ValueError("kepler_adaptive.c takes FSAL pairs only")
+
+    def lit(x):
+        return repr(float(x))
+
+    def comb(w, i):
+        return " + ".join(f"{lit(c)} * k{j}[{i}]" for j, c in enumerate(w) if c != 0)
+
+    lines = [f"#define S {s}", f"#define IORD {pair.iord}", f"#define EXPO {pair.expo!r}",
+             f"#define BETA {pair.beta!r}", f"#define SAFE {pair.safe!r}",
+             f"#define FAC1 {pair.fac1!r}", f"#define FAC2 {pair.fac2!r}",
+             "static double step_err(const double *y, double h, const double *k0, double rtol,",
+             "                       double atol, double *y1, double *knew) {",
+             "    double z[4];"]
+    for st in range(1, s - 1):
+        lines.append(f"    double k{st}[4];")
+        for i in range(n):
+            lines.append(f"    z[{i}] = y[{i}] + h * ({comb(tab.a[st][:st], i)});")
+        lines.append(f"    field(z, k{st});")
+    for i in range(n):
+        lines.append(f"    y1[{i}] = y[{i}] + h * ({comb(tab.b, i)});")
+    lines += [f"    const double *k{s - 1} = knew;", f"    (void)k{s - 1};", "    field(y1, knew);",
+              "    double acc = 0.0, acc3 = 0.0, sk, q;"]
+    for i in range(n):
+        lines.append(f"    sk = atol + rtol * fmax(fabs(y[{i}]), fabs(y1[{i}]));")
+        if pair.e3 is None:
+            lines.append(f"    q = h * ({comb(pair.e, i)}) / sk; acc += q * q;")
+        else:
+            lines.append(f"    q = ({comb(pair.e, i)}) / sk; acc += q * q;")
+            lines.append(f"    q = ({comb(pair.e3, i)}) / sk; acc3 += q * q;")
+    if pair.e3 is None:
+        lines.append(f"    (void)acc3; return sqrt(acc / {n});")
+    else:
+        lines += ["    double deno = acc + 0.01 * acc3;", "    if (deno <= 0.0) deno = 1.0;",
+                  f"    return fabs(h) * acc / sqrt(deno * {n});"]
+    lines.append("}")
+    return "\n".join(lines) + "\n"
+
+
+def build_c_adaptive(tmp: Path, method: str, pair) -> Path | None:
+    """Compile bench_c/kepler_adaptive.c with the pair's header into ``tmp``; None without gcc."""
+    gcc = shutil.which("gcc")
+    if gcc is None:
+        return None
+    (tmp / method).mkdir(exist_ok=True)
+    (tmp / method / "pair.h").write_text(pair_header(pair))
+    src = resources.files("suite") / "bench_c" / "kepler_adaptive.c"
+    exe = tmp / f"kepler_{method}"
+    with resources.as_file(src) as path:
+        # -march=native: numba compiles for the host CPU too (-ffp-contract=off still forbids FMA)
+        subprocess.run([gcc, "-O3", "-march=native", "-ffp-contract=off", "-fno-math-errno",
+                        "-I", str(tmp / method), "-o", str(exe), str(path), "-lm"],
+                       check=True, capture_output=True, text=True)
+    return exe
+
+
+def time_c_adaptive(exe: Path, y0, periods: int = ADAPTIVE_PERIODS,
+                    repeats: int = ADAPTIVE_REPEATS,
+                    tol: float = ADAPTIVE_TOL) -> dict:
+    args = [periods * 2 * math.pi, tol, tol, *map(float, y0)]
+    out = subprocess.run([str(exe), *map(repr, args), str(repeats)], check=True,
+                         capture_output=True, text=True).stdout.split()
+    return {"us_min": float(out[0]), "us_median": float(out[1]), "accepted": int(out[2]),
+            "rejected": int(out[3]), "nfev": float(out[4]),
+            "y": np.array([float(v) for v in out[5:9]])}
+
+
+def time_scipy(method: str, y0, periods: int = SCIPY_PERIODS, tol: float = ADAPTIVE_TOL,
+               repeats: int = 3) -> dict:
+    """solve_ivp on the Kepler field written as plain Python (numpy arrays in and out)."""
+    from scipy.integrate import solve_ivp
+
+    def kepler(t, y):
+        r2 = y[2] * y[2] + y[3] * y[3]
+        t0 = 1.0 / (r2 * math.sqrt(r2))
+        return np.array([-t0 * y[2], -t0 * y[3], y[0], y[1]])
+
+    per_step = {"RK45": 6, "DOP853": 12}[method]     # evaluations per attempted step (FSAL)
+    ts = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        sol = solve_ivp(kepler, (0.0, periods * 2 * math.pi), y0, method=method, rtol=tol,
+                        atol=tol)
+        dt = time.perf_counter() - t0
+        steps = (sol.nfev - 2) / per_step            # 2: f(y0) and the initial-step probe
+        ts.append(dt * 1e6 / steps)
+    return {"us_min": min(ts), "us_median": statistics.median(ts), "accepted": len(sol.t) - 1,
+            "attempted": steps}
+
+
+def bench_adaptive(with_c: bool = True, with_scipy: bool = True,
+                   periods: int = ADAPTIVE_PERIODS) -> list[dict]:
+    """Print the adaptive table (and return its rows): µs/step of numba vs C vs solve_ivp."""
+    print(f"{PROBLEM} e=0.6, adaptive rtol = atol = {ADAPTIVE_TOL:g}, {periods} periods "
+          f"(solve_ivp: {SCIPY_PERIODS}), µs per attempted step, min/median of {ADAPTIVE_REPEATS} repeats")
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="gnibench-c-") as tmp:
+        have_gcc = with_c and shutil.which("gcc") is not None
+        if with_c and not have_gcc:
+            print("gcc not found: C reference skipped")
+        head = f"{'method':<9}{'acc+rej':>14}{'min us':>9}{'median':>9}"
+        if have_gcc:
+            head += f"{'C min':>9}{'ratio':>7}  {'<=1.3':<6}{'same steps':<11}{'|dy| vs C':>10}"
+        if with_scipy:
+            head += f"{'scipy us':>10}{'speedup':>9}  {'>=100':<5}"
+        print(head)
+        for method, scipy_method in ADAPTIVE_CELLS:
+            r = time_numba_adaptive(method, periods)
+            row = {"method": method, "us_min": r["us_min"], "us_median": r["us_median"],
+                   "accepted": r["accepted"], "rejected": r["rejected"]}
+            line = (f"{method:<9}{r['accepted']:>9}+{r['rejected']:<4}{r['us_min']:9.4f}"
+                    f"{r['us_median']:9.4f}")
+            if have_gcc:
+                exe = build_c_adaptive(Path(tmp), method, r["pair"])
+                c = time_c_adaptive(exe, r["y0"], periods)
+                same = (c["accepted"], c["rejected"]) == (r["accepted"], r["rejected"])
+                dy = float(np.max(np.abs(c["y"] - r["y"])))
+                ratio = r["us_min"] / c["us_min"]
+                row.update(c_us_min=c["us_min"], c_us_median=c["us_median"], c_ratio=ratio,
+                           same_steps=same, max_abs_diff=dy)
+                line += (f"{c['us_min']:9.4f}{ratio:7.2f}  "
+                         f"{'yes' if ratio <= ADAPTIVE_TARGET_C else 'NO':<6}"
+                         f"{'yes' if same else 'NO':<11}{dy:10.1e}")
+            if with_scipy:
+                sp = time_scipy(scipy_method, r["y0"])
+                speedup = sp["us_min"] / r["us_min"]
+                row.update(scipy_method=scipy_method, scipy_us_min=sp["us_min"],
+                           scipy_speedup=speedup)
+                line += (f"{sp['us_min']:10.2f}{speedup:9.0f}  "
+                         f"{'yes' if speedup >= ADAPTIVE_TARGET_SCIPY else 'NO':<5}")
+            rows.append(row)
+            print(line)
     return rows
