@@ -297,25 +297,8 @@ def _integral_names(rec) -> tuple[str, ...]:
 
 def write_sections(result: SectionResult, fmt: str, out, stdout=sys.stdout) -> None:
     """Write the section points in csv, json or parquet (provenance as in suite.storage)."""
-    import json
-    from pathlib import Path
+    from suite.storage import write_frame
 
-    from suite.storage import _clean, atomic_write, write_parquet
-
-    df = result.frame()
     meta = {"problem": result.problem, "method": result.method, "status": result.status,
             "reason": result.reason, **result.meta}
-    if fmt == "csv":
-        if out is None:
-            df.to_csv(stdout, index=False)
-        else:
-            atomic_write(out, lambda p: df.to_csv(p, index=False))
-    elif fmt == "json":
-        doc = {"meta": meta, "columns": {c: [_clean(float(v)) for v in df[c]] for c in df.columns}}
-        text = json.dumps(doc, default=str)
-        if out is None:
-            stdout.write(text + "\n")
-        else:
-            atomic_write(out, lambda p: Path(p).write_text(text + "\n"))
-    else:
-        write_parquet(df, out, meta)
+    write_frame(result.frame(), meta, fmt, out, stdout)

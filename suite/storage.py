@@ -72,8 +72,12 @@ def read_parquet_meta(path: Path) -> dict:
 
 def write_result(result, fmt: str, out: Path | None, stdout) -> None:
     """Write one cell's trajectory in csv, json or parquet, to a file or stdout."""
-    df = trajectory_frame(result)
-    meta = provenance(result)
+    write_frame(trajectory_frame(result), provenance(result), fmt, out, stdout)
+
+
+def write_frame(df, meta: dict, fmt: str, out: Path | None, stdout) -> None:
+    """Write a table with its provenance: csv, json ({"meta", "columns"}) or parquet (schema
+    metadata), to a file (atomically) or stdout."""
     if fmt == "csv":
         if out is None:
             df.to_csv(stdout, index=False)
