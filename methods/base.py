@@ -21,6 +21,22 @@ NEWTON_PARAMS = (
 )
 
 
+def adaptive_params(tol: float) -> tuple[Param, ...]:
+    """Options of every adaptive method (Hairer's codes): tolerances, initial and maximal step,
+    step budget; relevant only when ``adaptive`` is true."""
+    only = ("adaptive", True)
+    return (
+        Param("rtol", tol, "relative tolerance", low=0.0, low_open=True, only_if=only),
+        Param("atol", tol, "absolute tolerance", low=0.0, low_open=True, only_if=only),
+        Param("h0", 0.0, "initial step (0: Hairer's HINIT heuristic)", low=0.0, only_if=only,
+              show_default=False),
+        Param("hmax", 0.0, "maximal step (0: the whole interval)", low=0.0, only_if=only,
+              show_default=False),
+        Param("max_steps", 100000, "maximal number of steps (Hairer's NMAX)", kind="int", low=1,
+              only_if=only, show_default=False),
+    )
+
+
 @dataclass(frozen=True)
 class Method:
     """A base integrator.

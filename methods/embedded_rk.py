@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from fractions import Fraction as Fr
 
 import methods.dop853_coefficients as dop853_data
-from methods.base import Method
+from methods.base import Method, adaptive_params
 from methods.explicit_rk import combination, generate_erk, helpers, stage_lines
 from methods.kernels import adaptive
 from methods.tableau import Tableau, lit, tableau
@@ -154,20 +154,11 @@ def _generate(pair: Pair):
 
 
 def _params(adaptive_default: bool, rtol: float):
-    only = ("adaptive", True)
     return (
         Param("adaptive", adaptive_default, "adaptive step size (else fixed step h)", kind="bool"),
         Param("h", 0.01, "step size (fixed-step mode)", low=0.0, low_open=True,
               only_if=("adaptive", False)),
-        Param("rtol", rtol, "relative tolerance", low=0.0, low_open=True, only_if=only),
-        Param("atol", rtol, "absolute tolerance", low=0.0, low_open=True, only_if=only),
-        Param("h0", 0.0, "initial step (0: Hairer's HINIT heuristic)", low=0.0, only_if=only,
-              show_default=False),
-        Param("hmax", 0.0, "maximal step (0: the whole interval)", low=0.0, only_if=only,
-              show_default=False),
-        Param("max_steps", 100000, "maximal number of steps (Hairer's NMAX)", kind="int", low=1,
-              only_if=only, show_default=False),
-    )
+    ) + adaptive_params(rtol)
 
 
 def embedded(id, pair, order, reference, doc, adaptive_default=True, rtol=1e-6):

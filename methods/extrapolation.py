@@ -12,7 +12,7 @@ from __future__ import annotations
 import itertools
 from dataclasses import dataclass
 
-from methods.base import Method
+from methods.base import Method, adaptive_params
 from methods.kernels import adaptive, extrapolation
 from suite.codegen import template
 from suite.params import Param
@@ -95,17 +95,9 @@ def _params():
               only_if=("adaptive", False)),
         Param("k", 4, "columns of the tableau (fixed-step mode): order 2k", kind="int", low=1,
               high=KMAX_LIMIT, only_if=("adaptive", False)),
-        Param("rtol", 1e-9, "relative tolerance", low=0.0, low_open=True, only_if=only),
-        Param("atol", 1e-9, "absolute tolerance", low=0.0, low_open=True, only_if=only),
-        Param("h0", 0.0, "initial step (0: Hairer's HINIT heuristic)", low=0.0, only_if=only,
-              show_default=False),
-        Param("hmax", 0.0, "maximal step (0: the whole interval)", low=0.0, only_if=only,
-              show_default=False),
-        Param("max_steps", 100000, "maximal number of steps (Hairer's NMAX)", kind="int", low=1,
-              only_if=only, show_default=False),
         Param("kmax", 9, "maximal number of columns (ODEX's KM); orders up to 2 kmax",
               kind="int", low=3, high=KMAX_LIMIT, only_if=only, show_default=False),
-    )
+    ) + adaptive_params(1e-9)
 
 
 odex = Method(id="odex", family="extrapolation", order=8,
