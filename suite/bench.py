@@ -233,7 +233,9 @@ def pair_header(pair, n: int = 4) -> str:
     def comb(w, i):
         return " + ".join(f"{lit(c)} * k{j}[{i}]" for j, c in enumerate(w) if c != 0)
 
-    lines = [f"#define S {s}", f"#define IORD {pair.iord}", f"#define EXPO {pair.expo!r}",
+    lazy = int(pair.lazy_last)      # f(y1) only once accepted (DOP853), as the numba driver
+    lines = [f"#define S {s}", f"#define LAZY_LAST {lazy}", f"#define IORD {pair.iord}",
+             f"#define EXPO {pair.expo!r}",
              f"#define BETA {pair.beta!r}", f"#define SAFE {pair.safe!r}",
              f"#define FAC1 {pair.fac1!r}", f"#define FAC2 {pair.fac2!r}",
              "static double step_err(const double *y, double h, const double *k0, double rtol,",
@@ -246,7 +248,8 @@ def pair_header(pair, n: int = 4) -> str:
         lines.append(f"    field(z, k{st});")
     for i in range(n):
         lines.append(f"    y1[{i}] = y[{i}] + h * ({comb(tab.b, i)});")
-    lines += [f"    const double *k{s - 1} = knew;", f"    (void)k{s - 1};", "    field(y1, knew);",
+    lines += [f"    const double *k{s - 1} = knew;", f"    (void)k{s - 1};",
+              "    (void)knew;" if lazy else "    field(y1, knew);",
               "    double acc = 0.0, acc3 = 0.0, sk, q;"]
     for i in range(n):
         lines.append(f"    sk = atol + rtol * fmax(fabs(y[{i}]), fabs(y1[{i}]));")

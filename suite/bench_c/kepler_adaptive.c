@@ -15,7 +15,8 @@
  *   gcc -O3 -march=native -ffp-contract=off -fno-math-errno -I DIR kepler_adaptive.c -lm
  * (-march=native: numba compiles for the host CPU too, and -ffp-contract=off still forbids FMA;
  * -fno-math-errno: sqrt/pow without the errno branch, as numba; results are unchanged).
- * FSAL pairs only (the last stage is f(y1)).
+ * FSAL pairs only (the last stage is f(y1)); with LAZY_LAST (DOP853, whose estimate does not
+ * use f(y1)) f(y1) is evaluated only once the step is accepted.
  *
  * usage: kepler_adaptive T_END RTOL ATOL P1 P2 Q1 Q2 REPEATS
  * prints "us_min us_median" (microseconds per attempted step, accepted + rejected, over the
@@ -38,7 +39,7 @@ static void field(const double *y, double *k) {
     k[3] = y[1];
 }
 
-#include "pair.h"   /* S, IORD, EXPO, BETA, SAFE, FAC1, FAC2, step_err: see the header comment */
+#include "pair.h"   /* S, LAZY_LAST, IORD, EXPO, BETA, SAFE, FAC1, FAC2, step_err: see the header comment */
 
 static double initial_step(const double *y, const double *fy, double hmax, double rtol,
                            double atol) {
@@ -75,7 +76,7 @@ static int integrate(double *y, double t_end, double rtol, double atol, long *na
         if (0.1 * fabs(h) <= fabs(t) * 2.220446049250313e-16 || !(h > 0.0)) { status = 4; break; }
         if (t + 1.01 * h - t_end > 0.0) { h = t_end - t; last = 1; }
         double err = step_err(y, h, k0, rtol, atol, y1, k1);
-        nfev += S - 1;
+        nfev += S - 1 - LAZY_LAST;
         double fac11 = pow(err, EXPO);
         double fac = fac11 / pow(facold, BETA);
         fac = fmax(1.0 / FAC2, fmin(1.0 / FAC1, fac / SAFE));
@@ -85,7 +86,8 @@ static int integrate(double *y, double t_end, double rtol, double atol, long *na
             nacc++;
             t = last ? t_end : t + h;
             memcpy(y, y1, sizeof y1);
-            memcpy(k0, k1, sizeof k0);                   /* FSAL */
+            if (LAZY_LAST) { field(y, k0); nfev += 1.0; }    /* f(y1) once accepted */
+            else memcpy(k0, k1, sizeof k0);                 /* FSAL */
             if (fabs(hnew) > hmax) hnew = hmax;
             if (reject) hnew = fmin(fabs(hnew), fabs(h));
             reject = 0;
