@@ -1,9 +1,11 @@
 """Embedded Runge-Kutta pairs: fixed step, or adaptive with Hairer's step-size control.
 
 Each pair is data: a tableau (the propagated solution), error weights e = b - b̂ over the stages
-(and over f(y1) when the last stage is f(y1), "first same as last"), and the controller constants of
-the code it follows. One generator writes the cell's ``step`` (fixed step: the propagated solution)
-or ``step_err`` (adaptive: also the scaled rms error); methods/kernels/adaptive.py drives it.
+(and over f(y1) when the last stage is f(y1), "first same as last"), the controller constants of
+the code it follows and, for DOPRI5 and DOP853, the continuous extension (methods/dense_output.py).
+One generator writes the cell's ``step`` (fixed step: the propagated solution) or ``step_err``
+(adaptive: also the scaled rms error) and ``step_stages`` (the same lines, also returning the
+stages, for dense output); methods/kernels/adaptive.py drives them.
 """
 from __future__ import annotations
 
@@ -12,6 +14,7 @@ from fractions import Fraction as Fr
 
 import methods.dop853_coefficients as dop853_data
 from methods.base import Method, adaptive_params
+from methods.dense_output import DenseOutput, generate_dense
 from methods.explicit_rk import combination, generate_erk, helpers, stage_lines
 from methods.kernels import adaptive
 from methods.tableau import Tableau, lit, tableau
@@ -32,12 +35,15 @@ class Pair:
     fac1: float = 0.2           # new h / old h >= fac1
     fac2: float = 10.0          # new h / old h <= fac2
     e3: tuple | None = None     # DOP853's 3rd-order weights (its combined estimate)
+    dense: DenseOutput | None = None   # continuous extension (Hairer's CONTD5 / CONTD8)
 
     def __post_init__(self):
         if abs(sum(self.e)) > 1e-14:
             raise ValueError("error weights must sum to 0 (b and b̂ both sum to 1)")
         if self.fsal and len(self.e) != self.tab.stages:
             raise ValueError("error weights must cover every stage")
+        if self.dense is not None:
+            self.dense.check(self.tab)
 
     @property
     def fsal(self) -> bool:
@@ -69,7 +75,12 @@ DOPRI5 = Pair(
         [0, "1/5", "3/10", "4/5", "8/9", 1, 1], order=5),
     e=tuple(Fr(x) for x in ("71/57600", "0", "-71/16695", "71/1920", "-17253/339200", "22/525",
                             "-1/40")),
-    iord=5, expo=0.2 - 0.04 * 0.75, beta=0.04, fac1=0.2, fac2=10.0)
+    iord=5, expo=0.2 - 0.04 * 0.75, beta=0.04, fac1=0.2, fac2=10.0,
+    # Hairer's DOPRI5 (CONTD5, its D1..D7 over the stages k1..k6, f(y1)); HNW I §II.6
+    dense=DenseOutput(order=4, d=(tuple(Fr(x) for x in (
+        "-12715105075/11282082432", "0", "87487479700/32700410799", "-10690763975/1880347072",
+        "701980252875/199316789632", "-1453857185/822651844", "69997945/29380423")),),
+        reference="Hairer's DOPRI5, CONTD5; HNW I §II.6"))
 
 # Runge-Kutta-Fehlberg 4(5), propagating the 4th-order solution ([B] §4.1 "RKF method").
 _RKF_B4 = ["25/216", 0, "1408/2565", "2197/4104", "-1/5", 0]
@@ -98,7 +109,13 @@ DOP853 = Pair(
     tab=Tableau(tuple(tuple(r) for r in _A), tuple(_A[12]),
                 tuple(_fr(x) for x in dop853_data.C[:13]), order=8),
     e=tuple(_fr(x) for x in dop853_data.E5), e3=tuple(_fr(x) for x in dop853_data.E3),
-    iord=8, expo=1.0 / 8.0, beta=0.0, fac1=0.333, fac2=6.0)
+    iord=8, expo=1.0 / 8.0, beta=0.0, fac1=0.333, fac2=6.0,
+    # Hairer's DOP853 (CONTD8): 3 extra stages over the 12, f(y1) and each other; 4 rows of D
+    dense=DenseOutput(order=7,
+                      d=tuple(tuple(float(x) for x in row) for row in dop853_data.D),
+                      extra_a=tuple(tuple(float(x) for x in dop853_data.A[i, :i]) for i in range(13, 16)),
+                      extra_c=tuple(float(x) for x in dop853_data.C[13:16]),
+                      reference="Hairer's DOP853, CONTD8; HNW I §II.6"))
 
 
 def _error_lines(pair: Pair, n: int) -> list[str]:
@@ -126,27 +143,40 @@ def _error_lines(pair: Pair, n: int) -> list[str]:
 def generate_adaptive(pair: Pair):
     def generate(ctx) -> str:
         n, s, tab = ctx.n, pair.tab.stages, pair.tab
-        body = ["\n@njit(cache=True)\ndef step_err(y, h, par, k0, rtol, atol):"]
         count = s - 1 if pair.fsal else s
         lines, arities = stage_lines(tab, count, first="k0")
-        body += lines
-        body.append(f"    y1 = {combination(tab.b, arities)}")
+        lines.append(f"    y1 = {combination(tab.b, arities)}")
         fsal = pair.fsal and not pair.lazy_last
         if fsal:
-            body.append(f"    k{s - 1} = f(y1, par)")
+            lines.append(f"    k{s - 1} = f(y1, par)")
             knew = f"k{s - 1}"
         else:
             knew = "k0"                      # the driver evaluates f(y1) once the step is accepted
-        body += _error_lines(pair, n)
-        body.append(f"    return y1, err, {knew}")
+        lines += _error_lines(pair, n)
+        # step_stages: the very same lines (hence the same y1 and err, bit for bit), also returning
+        # the stages for the continuous extension
+        stages = ", ".join(f"k{j}" for j in range(count)) + ("," if count == 1 else "")
+        body = (["\n@njit(cache=True)\ndef step_err(y, h, par, k0, rtol, atol):"] + lines
+                + [f"    return y1, err, {knew}"]
+                + ["\n@njit(cache=True)\ndef step_stages(y, h, par, k0, rtol, atol):"] + lines
+                + [f"    return y1, err, {knew}, ({stages})"])
+        dense_src, dense_nfev = "", 0.0
+        if pair.dense is not None:            # integrate_dense, dense_coeffs and what they call
+            dense_src, dense_arities = generate_dense(pair.dense, tab, count, n)
+            arities |= dense_arities
+            dense_nfev = float(pair.dense.extra_stages)
+            dense_src += (template(adaptive.dense_coeffs)
+                          + template(adaptive.integrate_adaptive,
+                                     {"integrate_adaptive": "integrate_dense", "DENSE_OUTPUT": "True"}))
         comma = "," if n == 1 else ""
         shift = ", ".join(f"y[{i}] + h * v[{i}]" for i in range(n))
         consts = (f"\nFSAL = {fsal}\nSTAGES_NEW = {float(count - 1 + fsal)!r}\nIORD = {pair.iord}\n"
                   f"EXPO = {pair.expo!r}\nBETA = {pair.beta!r}\nSAFE = {pair.safe!r}\n"
-                  f"FAC1 = {pair.fac1!r}\nFAC2 = {pair.fac2!r}\n"
+                  f"FAC1 = {pair.fac1!r}\nFAC2 = {pair.fac2!r}\nDENSE_NFEV = {dense_nfev!r}\n"
                   f"\n@njit(cache=True)\ndef to_tuple_shift(y, h, v):\n    return ({shift}{comma})\n")
         return (consts + helpers(n, arities) + "\n".join(body) + "\n"
-                + template(adaptive.initial_step) + template(adaptive.integrate_adaptive))
+                + template(adaptive.initial_step)
+                + template(adaptive.integrate_adaptive, {"DENSE_OUTPUT": "False"}) + dense_src)
     return generate
 
 
@@ -161,17 +191,23 @@ def _generate(pair: Pair):
     return generate
 
 
-def _params(adaptive_default: bool, rtol: float):
+DT_OUT = Param("dt_out", 0.0, "output on the grid k dt_out by dense output, the steps unchanged "
+               "(0: a sample every `every` accepted steps)", low=0.0, only_if=("adaptive", True),
+               show_default=False)
+
+
+def _params(adaptive_default: bool, rtol: float, dense: bool):
     return (
         Param("adaptive", adaptive_default, "adaptive step size (else fixed step h)", kind="bool"),
         Param("h", 0.01, "step size (fixed-step mode)", low=0.0, low_open=True,
               only_if=("adaptive", False)),
-    ) + adaptive_params(rtol)
+    ) + adaptive_params(rtol) + ((DT_OUT,) if dense else ())
 
 
 def embedded(id, pair, order, reference, doc, adaptive_default=True, rtol=1e-6):
     return Method(id=id, family="embedded-rk", order=order, reference=reference, doc=doc,
-                  generate=_generate(pair), data=pair, params=_params(adaptive_default, rtol))
+                  generate=_generate(pair), data=pair,
+                  params=_params(adaptive_default, rtol, pair.dense is not None))
 
 
 merson = embedded("merson", MERSON, 4, "[B] §6, §8", "Kutta-Merson 4(5); fixed step by default",

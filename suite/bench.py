@@ -195,10 +195,10 @@ def run_adaptive(integrate_adaptive, y0, par, t_end: float, tol: float = ADAPTIV
     """One timed adaptive integration to t_end, sampled only at the end (h0 = 0: HINIT, hmax =
     t_end): (seconds, accepted, rejected, nfev, final state)."""
     y_io = np.array([y0, np.zeros_like(y0)])
-    st = np.zeros(9)
+    st = np.zeros(10)
     out_t, out_y, out_c = np.empty(4), np.empty((4, y0.size)), np.zeros((4, 4))
     t0 = time.perf_counter()
-    status, rows = integrate_adaptive(y_io, st, par, t_end, 0.0, t_end, tol, tol, 1 << 60,
+    status, rows = integrate_adaptive(y_io, st, par, t_end, 0.0, t_end, tol, tol, 1 << 60, 0.0, 0,
                                       1 << 60, out_t, out_y, out_c)
     dt = time.perf_counter() - t0
     if status != 0:

@@ -6,19 +6,40 @@ Design
    long horizon never holds the whole trajectory in memory and the run stops as soon as K crossings
    have been found. Compiled fixed-step methods restart the driver from the last state of the
    previous chunk (the drivers are one-step: the restart continues the same numerical trajectory);
-   compiled adaptive methods resume their driver state; external engines and transformed problems
-   (K-S) are solved once over the whole horizon with every = 1 and then scanned.
+   compiled adaptive methods resume their driver state, and also report the size of every accepted
+   step; external engines and transformed problems (K-S) are solved once over the whole horizon
+   with every = 1 and then scanned.
 2. *Detection.* A crossing of {g = 0} lies in (t_n, t_n+1] when g(y_n) > 0 >= g(y_n+1) or
    g(y_n) < 0 <= g(y_n+1) (a sample exactly on the section belongs to the interval that ends there;
    the initial point, often on the section, is never a crossing).
-3. *Location (Hénon 1982).* From the sample y_n before the crossing, the system is integrated with
-   g as the independent variable, dy/dg = F(y) / (grad g . F(y)), dt/dg = 1 / (grad g . F(y)), over
-   Delta g = -g(y_n), by DOP853 (order 8) with m equal substeps, m doubled from 2 until two
-   successive results agree to 1e-15 (relative). F is the field the method integrates: the compiled
-   cell's ``f``, i.e. the base field or the modified one (observer, penalty); for external engines
-   and transformed problems it is the base field of the problem. When g is a state coordinate (every
-   current section), dg/dg = 1 exactly, so g at the located point is 0 up to round-off; the
-   located |g| is reported (``meta.max_abs_g``).
+3. *Location.* The crossing of the numerical solution is located by one of two locators, recorded
+   in ``meta.locator``:
+
+   * ``dense`` -- where the method has a continuous extension and the accepted points are its
+     endpoints (dopri5, dop853 in adaptive mode, without a step modifier such as +projection and on
+     a problem without an identification map ``post_step``; :func:`suite.solve.dense_output_refusal`).
+     The step (t_n, t_n+1] is recomputed from y_n with the driver's step size by the cell's
+     ``dense_coeffs``, i.e. by the very operations of ``step_err``: its end point must equal the
+     sample y_n+1 bit for bit (else the crossing falls back to Hénon's trick and is counted in
+     ``meta.dense.fallbacks``). The continuous extension u(θ) (DOPRI5: order 4, DOP853: order 7;
+     methods/dense_output.py) is then solved for g(u(θ)) = 0 by Newton's method with
+     du/dθ from the same extension, kept inside the sign bracket on [0, 1] (bisection when a Newton
+     step leaves it), until the step no longer changes θ; the iterate of smallest |g| is reported,
+     at t_n + θ h. The located point is the method's own dense output: it lies on the numerical
+     orbit within the extension's error, of the order of the tolerance (on henon-heiles at
+     rtol = 1e-12 the dense and Hénon crossings differ by 3e-12; tests/test_sections.py).
+   * ``henon`` (Hénon 1982) -- every other method, the fixed-step mode of the embedded pairs, and
+     cells with a step modifier or a problem ``post_step`` (their accepted point is not the end of
+     the continuous extension). From the sample y_n before the crossing, the system is integrated
+     with g as the independent variable, dy/dg = F(y) / (grad g . F(y)), dt/dg = 1 / (grad g .
+     F(y)), over Delta g = -g(y_n), by DOP853 (order 8) with m equal substeps, m doubled from 2 until
+     two successive results agree to 1e-15 (relative). F is the field the method integrates: the
+     compiled cell's ``f``, i.e. the base field or the modified one (observer, penalty); for
+     external engines and transformed problems it is the base field of the problem. The located
+     point is on the exact flow through y_n.
+
+   When g is a state coordinate (every current section), g at the located point is 0 up to
+   round-off with either locator; the largest located |g| is reported (``meta.max_abs_g``).
 4. *Selection.* The crossing counts when ``condition(y*) > 0`` at the located point y*.
 
 Output columns: ``crossing`` (1, 2, ...), ``t``, ``chart`` (multi-chart sections, e.g. so(4)'s
@@ -37,6 +58,7 @@ from suite.errors import UserError
 CHUNK = 8192                  # steps per chunk of the compiled drivers
 HENON_RTOL = 1e-15            # agreement of m and 2m DOP853 substeps
 HENON_MAX_SUBSTEPS = 4096
+DENSE_MAXIT = 60              # Newton (or bisection) iterations on the continuous extension
 
 
 @dataclass
@@ -136,10 +158,60 @@ def henon(y: np.ndarray, t: float, F, grad_g, g, par_g) -> tuple[np.ndarray, flo
     return prev[:n], float(prev[n]), m
 
 
+# -- dense output ------------------------------------------------------------------------------------
+
+def dense_crossing(mod, par, y0, t0: float, h: float, y1_sample, t1: float, g, grad_g, par_g):
+    """The crossing of {g = 0} by the continuous extension of the step from (t0, y0) of size h,
+    which ended at the sample (t1, y1_sample).
+
+    ``mod`` is the cell's compiled module (``f``, ``dense_coeffs``, ``dense_eval``,
+    ``dense_slope``), ``par`` its parameters; ``g(y, par_g)`` and ``grad_g`` the section function.
+    Returns (point, time, Newton iterations), or None when the recomputed step does not end on
+    ``y1_sample`` (then the caller falls back to Hénon's trick).
+    """
+    y0 = tuple(float(x) for x in y0)
+    y1, cf = mod.dense_coeffs(y0, h, par, mod.f(y0, par))
+    end = tuple(float(x) for x in y1_sample)
+    if y1 != end:
+        return None
+    g_end = g(end, par_g)
+    if g_end == 0.0:
+        return np.array(end), t1, 0
+    lo, g_lo, hi, g_hi = 0.0, g(y0, par_g), 1.0, g(mod.dense_eval(cf, 1.0), par_g)
+    best = (abs(g_end), 1.0, end)
+    if g_lo * g_hi > 0.0:              # u(1) and y1 differ by round-off and g(y1) is that small
+        return np.array(end), t1, 0
+    theta = lo - g_lo * (hi - lo) / (g_hi - g_lo)
+    it = 0
+    for it in range(1, DENSE_MAXIT + 1):
+        u = mod.dense_eval(cf, theta)
+        gu = g(u, par_g)
+        if abs(gu) < best[0]:
+            best = (abs(gu), theta, u)
+        if gu == 0.0:
+            break
+        if (gu > 0.0) == (g_lo > 0.0):
+            lo, g_lo = theta, gu
+        else:
+            hi, g_hi = theta, gu
+        slope = float(np.dot(grad_g(u, par_g), mod.dense_slope(cf, theta)))
+        new = theta - gu / slope if slope != 0.0 else np.nan
+        if not lo < new < hi:
+            new = 0.5 * (lo + hi)        # Newton left the bracket: bisect
+        if new == theta or hi - lo <= 2.3e-16 * hi:
+            break
+        theta = new
+    _, theta, u = best
+    if theta == 1.0:
+        return np.array(end), t1, it
+    return np.array(u, dtype=float), t0 + theta * h, it
+
+
 # -- sample streams ---------------------------------------------------------------------------------
 
 def _fixed_chunks(cell, rec, h, nsteps, h_last):
-    """Yield (t, y, status, done) chunks of the compiled fixed-step driver, restarted per chunk."""
+    """Yield (t, y, None, status, done) chunks of the compiled fixed-step driver, restarted per
+    chunk (no step sizes: the crossings of fixed-step cells are located by Hénon's trick)."""
     y = np.array(cell.y0, dtype=np.float64)
     k0 = 0
     while k0 < nsteps:
@@ -150,7 +222,7 @@ def _fixed_chunks(cell, rec, h, nsteps, h_last):
         code, done, rows = cell.mod.integrate(y, cell.par, h, m, hl, 1, out_t, out_y, out_c)
         k = k0 + out_c[:rows, 0]
         t = np.where(k < nsteps, k * h, (nsteps - 1) * h + h_last)
-        yield t, out_y[:rows].copy(), int(code), k0 + int(done)
+        yield t, out_y[:rows].copy(), None, int(code), k0 + int(done)
         if int(code) != 0:
             return
         y = out_y[rows - 1].copy()
@@ -158,17 +230,21 @@ def _fixed_chunks(cell, rec, h, nsteps, h_last):
 
 
 def _adaptive_chunks(cell, rec, v, t_end):
+    """Yield (t, y, h, status, done) chunks of the resumable adaptive driver; h[i] is the size of
+    the accepted step ending at sample i (the driver's 5th output column; 0 where unknown)."""
+    from suite.solve import ADAPTIVE_STATE
+
     y_io = np.array([cell.y0, np.zeros(rec.dim)], dtype=np.float64)
-    st = np.zeros(9)
+    st = np.zeros(ADAPTIVE_STATE)
     hmax = v["hmax"] if v["hmax"] > 0 else t_end
     while True:
         cap = CHUNK
-        out_t, out_y, out_c = np.empty(cap), np.empty((cap, rec.dim)), np.zeros((cap, 4))
+        out_t, out_y, out_c = np.empty(cap), np.empty((cap, rec.dim)), np.zeros((cap, 5))
         code, rows = cell.mod.integrate_adaptive(y_io, st, cell.par, t_end, v["h0"], hmax,
-                                                 v["rtol"], v["atol"], 1, v["max_steps"],
+                                                 v["rtol"], v["atol"], 1, 0.0, 0, v["max_steps"],
                                                  out_t, out_y, out_c)
-        t, y = out_t[:rows].copy(), out_y[:rows].copy()
-        yield t, y, (0 if code == 5 else int(code)), int(st[4])
+        t, y, h = out_t[:rows].copy(), out_y[:rows].copy(), out_c[:rows, 4].copy()
+        yield t, y, h, (0 if code == 5 else int(code)), int(st[4])
         if code != 5:
             return
 
@@ -176,13 +252,19 @@ def _adaptive_chunks(cell, rec, v, t_end):
 # -- the command ------------------------------------------------------------------------------------
 
 def solve_section(problem_text: str, method_text: str, crossings: int, steps: int | None = None,
-                  t_end: float | None = None) -> SectionResult:
-    """Integrate until ``crossings`` crossings of the problem's first section (or the horizon)."""
+                  t_end: float | None = None, locator: str | None = None) -> SectionResult:
+    """Integrate until ``crossings`` crossings of the problem's first section (or the horizon).
+
+    ``locator``: None (dense output where it applies, else Hénon's trick), ``"henon"`` (always
+    Hénon's trick, e.g. to compare the two) or ``"dense"`` (a UserError where it does not apply).
+    """
     from suite.codegen import STATUS
-    from suite.solve import _compiled_cell, grid, grid_step, prepare, solve
+    from suite.solve import _compiled_cell, dense_output_refusal, grid, grid_step, prepare, solve
 
     if crossings < 1:
         raise UserError(f"bad --section {crossings}; allowed: an integer >= 1 (number of crossings)")
+    if locator not in (None, "dense", "henon"):
+        raise UserError(f"bad locator {locator!r}; allowed: dense, henon")
     problem, method = prepare(problem_text, method_text)
     rec = problem.record
     sec, g, grad_g, cond, fns = section_of(rec)
@@ -193,9 +275,10 @@ def solve_section(problem_text: str, method_text: str, crossings: int, steps: in
     transformed = rec.transformed(problem.values) is not None
     adaptive = bool(method.base.values.get("adaptive"))
     t0 = time.perf_counter()
+    dense_why = "external engine or transformed problem"
     if external or transformed:
         res = solve(problem_text, method_text, steps=steps, t_end=t_end, every=1, reference="none")
-        stream = iter([(res.t, res.y, 0 if res.status == "ok" else -1, len(res.t) - 1)])
+        stream = iter([(res.t, res.y, None, 0 if res.status == "ok" else -1, len(res.t) - 1)])
         status_of = {0: "ok", -1: res.status}.get
         reason0 = res.reason
 
@@ -205,6 +288,9 @@ def solve_section(problem_text: str, method_text: str, crossings: int, steps: in
         field_used = "base field of the problem"
     else:
         cell = _compiled_cell(problem, method)
+        dense_why = dense_output_refusal(problem, method)
+        if locator == "henon":
+            dense_why = "Hénon's trick asked for (locator='henon')"
         if adaptive:
             if t_end is None:
                 raise UserError(f"{method.base.id} with adaptive=true needs --t-end T (not --steps)")
@@ -223,30 +309,43 @@ def solve_section(problem_text: str, method_text: str, crossings: int, steps: in
         field_used = ("field integrated by the method (" +
                       ("modified: " + "+".join(m.record.id for m in method.modifiers)
                        if method.modifiers else "base") + ")")
+    if locator == "dense" and dense_why:
+        raise UserError(f"dense output does not locate these crossings: {dense_why}")
     y0 = rec.y0(problem.values)
     inv = fns["invariants"]
     H0 = np.asarray(inv(tuple(y0), ppar), dtype=float)
 
-    pts_t, pts_y, max_g, max_sub = [], [], 0.0, 0
+    pts_t, pts_y, max_g, max_sub, max_it, fallbacks = [], [], 0.0, 0, 0, 0
     prev = None                                  # last sample of the previous chunk
     status, t_last = "ok", 0.0
-    for t, Y, code, _ in stream:
+    for t, Y, H, code, _ in stream:
         if prev is not None and len(t) and t[0] == prev[0][0]:
             t, Y = t[1:], Y[1:]                  # the restart repeats the previous last sample
         if prev is not None:
             t = np.concatenate([prev[0], t])
             Y = np.concatenate([prev[1], Y])
+            H = None if H is None else np.concatenate([prev[2], H])
         if len(t) == 0:
             break
         gv = _g_values(g, Y, ppar)
         for n in crossing_intervals(gv):
-            ys, ts, m = henon(Y[n], float(t[n]), F, grad_g, g, ppar)
+            found = None
+            if not dense_why:
+                found = (dense_crossing(cell.mod, cell.par, Y[n], float(t[n]), float(H[n + 1]),
+                                        Y[n + 1], float(t[n + 1]), g, grad_g, ppar)
+                         if H[n + 1] > 0 else None)
+                fallbacks += found is None
+            if found is not None:
+                ys, ts, it = found
+                max_it = max(max_it, it)
+            else:
+                ys, ts, m = henon(Y[n], float(t[n]), F, grad_g, g, ppar)
+                max_sub = max(max_sub, m)
             if not cond(tuple(ys), ppar) > 0:
                 continue
             pts_t.append(ts)
             pts_y.append(ys)
             max_g = max(max_g, abs(g(tuple(ys), ppar)))
-            max_sub = max(max_sub, m)
             if len(pts_t) == crossings:
                 break
         t_last = float(t[-1])
@@ -255,7 +354,7 @@ def solve_section(problem_text: str, method_text: str, crossings: int, steps: in
             break
         if len(pts_t) == crossings:
             break
-        prev = (t[-1:], Y[-1:])
+        prev = (t[-1:], Y[-1:], None if H is None else H[-1:])
     wall = time.perf_counter() - t0
     reason = ""
     if status != "ok":
@@ -280,11 +379,19 @@ def solve_section(problem_text: str, method_text: str, crossings: int, steps: in
 
     meta = {"versions": versions(), "section": sec.name, "section_reference": sec.reference,
             "crossings_requested": crossings, "crossings_found": len(pts_t),
-            "max_abs_g": max_g, "henon": {"integrator": "DOP853, m equal substeps in g",
-                                          "max_substeps": max_sub, "rtol": HENON_RTOL,
-                                          "field": field_used},
+            "max_abs_g": max_g, "locator": "henon" if dense_why else "dense",
             "wall_seconds": wall, "h": h, "nsteps": nsteps, "t_last_sample": t_last,
             "y0": list(y0), "H0": H0.tolist(), "design": "suite/sections.py"}
+    if dense_why:
+        meta["locator_note"] = f"no dense output: {dense_why}"
+    else:
+        ext = method.base.record.data.dense
+        meta["dense"] = {"extension": ext.reference, "order": ext.order,
+                         "root": "Newton on g(u(theta)) inside the sign bracket",
+                         "max_iterations": max_it, "fallbacks": fallbacks}
+    if dense_why or fallbacks:
+        meta["henon"] = {"integrator": "DOP853, m equal substeps in g", "max_substeps": max_sub,
+                         "rtol": HENON_RTOL, "field": field_used}
     return SectionResult(problem=problem.text(), method=method.text(), status=status,
                          reason=reason, section=sec.name, columns=cols, meta=meta)
 

@@ -14,6 +14,8 @@ from suite.codegen import STATUS, load
 from suite.errors import UserError
 from suite.spec import Bound, MethodConfig, parse_method, parse_problem
 
+ADAPTIVE_STATE = 10     # length of ``st``, the resumable state of the adaptive drivers
+
 
 @dataclass
 class Result:
@@ -139,6 +141,10 @@ def solve(problem_text: str, method_text: str, steps: int | None = None,
                             f"transformed system of {problem.id} (drop the transform option)")
         return _solve_external(problem, method, SampleGrid(h, nsteps, h_last, every), ref)
     if transformed is not None:
+        if method.base.values.get("adaptive") and method.base.values.get("dt_out", 0.0) > 0.0:
+            raise UserError(f"dt_out spaces a grid in the integrated system's time, which for the "
+                            f"transformed system of {problem.id} is not t (drop dt_out or the "
+                            f"transform option)")
         return _solve_transformed(problem, transformed, method, steps, t_end, every, ref)
     return _solve_bound(problem, method, steps, t_end, every, ref)
 
@@ -147,11 +153,17 @@ def _solve_bound(problem: Bound, method: MethodConfig, steps, t_end, every, ref=
     """The compiled path for resolved specs (fixed step or adaptive)."""
     h = grid_step(method)
     nsteps, h_last = grid(h, steps, t_end)
+    adaptive = method.base.values.get("adaptive")
+    if adaptive and t_end is None:
+        raise UserError(f"{method.base.id} with adaptive=true needs --t-end T (not --steps); "
+                        f"for fixed steps use {method.base.id}:adaptive=false,h=...")
+    if adaptive and method.base.values.get("dt_out", 0.0) > 0.0:
+        why = dense_output_refusal(problem, method)
+        if why:
+            raise UserError(f"dt_out needs dense output, which does not apply here: {why}; "
+                            f"use --every K instead")
     cell = _compiled_cell(problem, method)
-    if method.base.values.get("adaptive"):
-        if t_end is None:
-            raise UserError(f"{method.base.id} with adaptive=true needs --t-end T (not --steps); "
-                            f"for fixed steps use {method.base.id}:adaptive=false,h=...")
+    if adaptive:
         return _solve_adaptive(problem, method, cell, float(t_end), every, ref)
     mod, rec, par = cell.mod, problem.record, cell.par
     y0a = np.array(cell.y0, dtype=np.float64)
@@ -197,36 +209,70 @@ def _compiled_cell(problem: Bound, method: MethodConfig) -> _Cell:
         idx = [names.index(x) for x in m.values["on"]]
         extra.extend(m.record.runtime(m.values, [h0_all[k] for k in idx]))
     par = np.concatenate([ppar, np.array(extra, dtype=np.float64)])
-    # warm-up: one step on scratch arrays loads (or compiles) every function of the cell
+    # warm-up: one step on scratch arrays loads (or compiles) the driver the cell runs and all it
+    # calls (with dt_out, the dense-output driver)
     y0a = np.array(y0, dtype=np.float64)
     if method.base.values.get("adaptive"):
-        st, y_io = np.zeros(9), np.array([y0a, np.zeros_like(y0a)])
-        mod.integrate_adaptive(y_io, st, par, 1.0, 0.0, 1.0, 1e-3, 1e-3, 1, 1,
-                               np.empty(2), np.empty((2, rec.dim)), np.zeros((2, 4)))
+        dense = method.base.values.get("dt_out", 0.0) > 0.0
+        drive = mod.integrate_dense if dense else mod.integrate_adaptive
+        st, y_io = np.zeros(ADAPTIVE_STATE), np.array([y0a, np.zeros_like(y0a)])
+        drive(y_io, st, par, 1.0, 0.0, 1.0, 1e-3, 1e-3, 1, 0.5, 2, 1,
+              np.empty(2), np.empty((2, rec.dim)), np.zeros((2, 4)))
     else:
         mod.integrate(y0a, par, float(method.base.values.get("h", 0.01)), 1, 0.01, 1,
                       np.empty(3), np.empty((3, rec.dim)), np.zeros((3, 4)))
     return _Cell(mod, names, ppar, par, tuple(y0), tuple(h0_all), time.perf_counter() - t0)
 
 
+def dense_output_refusal(problem: Bound, method: MethodConfig) -> str:
+    """Why the cell's accepted steps are not the endpoints of its method's continuous extension
+    (methods/dense_output.py), or "" when dense output applies."""
+    base = method.base
+    if getattr(base.record.data, "dense", None) is None:
+        return f"{base.id} has no continuous extension (dense output: dopri5, dop853)"
+    if not base.values.get("adaptive"):
+        return f"{base.id} runs at fixed step (adaptive=false)"
+    steps = [m.record.id for m in method.modifiers if m.record.kind == "step"]
+    if steps:
+        return f"+{steps[0]} moves each accepted point off the continuous extension's endpoint"
+    if problem.record.post_step is not None:
+        return (f"{problem.id} maps each accepted point by its identification (post_step), off the "
+                f"continuous extension's endpoint")
+    return ""
+
+
 def _solve_adaptive(problem, method, cell, t_end, every, ref) -> Result:
-    """Adaptive embedded RK: the resumable driver fills fixed-size chunks until t_end."""
+    """Adaptive embedded RK: the resumable driver fills fixed-size chunks until t_end.
+
+    With ``dt_out`` > 0 the samples are the grid k dt_out (every ``every``-th point) plus t_end,
+    spaced as the external engines space theirs (:class:`SampleGrid`), filled by dense output."""
     v, rec = method.base.values, problem.record
+    dt_out = float(v.get("dt_out", 0.0))
+    n_out, dense_meta = 0, {}
+    if dt_out > 0.0:                      # dense output applies: checked by _solve_bound
+        n_out, _ = grid(dt_out, None, t_end)
+        dense = method.base.record.data.dense
+        dense_meta = {"dense_output": {"dt_out": dt_out, "grid_intervals": n_out,
+                                       "order": dense.order, "extension": dense.reference,
+                                       "extra_f_per_dense_step": dense.extra_stages}}
     y_io = np.array([cell.y0, np.zeros(rec.dim)], dtype=np.float64)
-    st = np.zeros(9)
+    st = np.zeros(ADAPTIVE_STATE)
     hmax = v["hmax"] if v["hmax"] > 0 else t_end
+    # dense output: the whole grid in one buffer (a step may hold many grid points)
+    cap = 4096 if dt_out == 0.0 else -(-n_out // every) + 3
+    drive = cell.mod.integrate_dense if dt_out > 0.0 else cell.mod.integrate_adaptive
     chunks, wall = [], 0.0
     while True:
-        cap = 4096
         out_t, out_y, out_c = np.empty(cap), np.empty((cap, rec.dim)), np.zeros((cap, 4))
         t1 = time.perf_counter()
-        code, rows = cell.mod.integrate_adaptive(y_io, st, cell.par, t_end, v["h0"], hmax,
-                                                 v["rtol"], v["atol"], every, v["max_steps"],
-                                                 out_t, out_y, out_c)
+        code, rows = drive(y_io, st, cell.par, t_end, v["h0"], hmax, v["rtol"], v["atol"], every,
+                           dt_out, n_out, v["max_steps"], out_t, out_y, out_c)
         wall += time.perf_counter() - t1
         chunks.append((out_t[:rows].copy(), out_y[:rows].copy(), out_c[:rows].copy()))
         if code != 5:
             break
+        if rows == 0:
+            raise RuntimeError("adaptive driver: output buffer too small for one step")
     t, y, c = (np.concatenate([ch[i] for ch in chunks]) for i in range(3))
     status = STATUS[int(code)]
     reason = {"max_steps": f"more than max_steps={v['max_steps']} steps before t = {t_end:g}",
@@ -234,7 +280,8 @@ def _solve_adaptive(problem, method, cell, t_end, every, ref) -> Result:
               "newton_failed": f"the projection did not converge at t = {st[0]:.17g}",
               }.get(status, "")
     return _result(problem, method, cell, t, y, c, ref, status, reason, wall, v["h0"],
-                   {"t_end": t_end, "every": every, "accepted": int(st[4]), "rejected": int(st[5])})
+                   {"t_end": t_end, "every": every, "accepted": int(st[4]), "rejected": int(st[5]),
+                    **dense_meta})
 
 
 def _result(problem, method, cell, t, y, c, ref, status, reason, wall, h, grid_meta) -> Result:

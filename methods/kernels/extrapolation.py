@@ -130,8 +130,10 @@ def column(j, y, fy, h, hmax, par, T, hh, w, rtol, atol, errold):
     return err, errold, float(nf), False
 
 
-def integrate_adaptive(y_io, st, par, t_end, h0, hmax, rtol, atol, every, max_steps,
+def integrate_adaptive(y_io, st, par, t_end, h0, hmax, rtol, atol, every, dt_out, n_out, max_steps,
                        out_t, out_y, out_c):
+    # dt_out, n_out: the dense-output grid of the embedded pairs' driver; odex has no dense output
+    # here (its ``dt_out`` is always 0), the arguments keep one signature for every adaptive driver
     T = np.empty((KMAX, N))
     hh = np.zeros(KMAX)
     w = np.zeros(KMAX)

@@ -15,6 +15,7 @@ EXPLICIT = False
 f = fjac = to_tuple = shifted = store = _unbound
 lu_solve = newton_done = _unbound
 invariants = make_ws = step = post_step = project = record_row = step_err = to_tuple_shift = _unbound
-BETA = EXPO = FAC1 = FAC2 = SAFE = 0.0
+step_stages = dense_from_stages = dense_eval = _unbound
+BETA = EXPO = FAC1 = FAC2 = SAFE = DENSE_NFEV = 0.0
 IORD = STAGES_NEW = 0
-FSAL = False
+FSAL = DENSE_OUTPUT = False

@@ -1,0 +1,230 @@
+"""Continuous extensions of embedded pairs (dense output), as data plus one generator.
+
+An accepted step y0 -> y1 of size h, with stages K_0 = f(y0), ..., K_{s-1} = f(y1) (the pair's
+tableau ends with f(y1)) and possibly extra stages K_s, ..., is extended to
+u(θ) = y0 + θ (F0 + (1-θ) (F1 + θ (F2 + (1-θ) (F3 + θ (F4 + ...))))),   0 <= θ <= 1,
+with F0 = y1 - y0, F1 = h K_0 - F0, F2 = F0 - h K_{s-1} - F1 and F_r = h Σ_j d_{r-3, j} K_j
+(r >= 3): Hairer's CONTD5 (DOPRI5, 4th order, HNW I §II.6) and CONTD8 (DOP853, 7th
+order with 3 extra stages). So u(0) = y0, u(1) = y1, u'(0) = h f(y0), u'(1) = h f(y1) by
+construction. The record holds d (and the extra stages); :meth:`DenseOutput.check` verifies on
+construction that u(θ) = y0 + h Σ_j b_j(θ) K_j satisfies every order condition up to ``order`` as
+a polynomial identity in θ (Σ_j b_j(θ) Φ_j(t) = θ^|t| / γ(t) for every rooted tree t, HNW I §II.2
+and §II.6), exactly for rational data.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from fractions import Fraction
+
+from methods.tableau import lit
+
+# -- order conditions -------------------------------------------------------------------------------
+
+
+def rooted_trees(order: int) -> dict[int, list[tuple]]:
+    """Rooted trees by number of nodes (1, 1, 2, 4, 9, 20, 48, 115, ...); a tree is the sorted
+    tuple of its root's subtrees."""
+    by_size: dict[int, list[tuple]] = {1: [()]}
+
+    def forests(m, lowest):
+        """Multisets of trees with m nodes in all, listed in non-decreasing (size, index) order."""
+        if m == 0:
+            yield ()
+            return
+        for size in range(1, m + 1):
+            for index, tree in enumerate(by_size[size]):
+                if (size, index) < lowest:
+                    continue
+                for rest in forests(m - size, (size, index)):
+                    yield (tree,) + rest
+
+    for n in range(2, order + 1):
+        by_size[n] = list(forests(n - 1, (0, 0)))
+    return by_size
+
+
+def density(tree: tuple) -> int:
+    """γ(t): the number of nodes times the densities of the subtrees."""
+    g = 1 + sum(_nodes(c) for c in tree)
+    for c in tree:
+        g *= density(c)
+    return g
+
+
+def _nodes(tree: tuple) -> int:
+    return 1 + sum(_nodes(c) for c in tree)
+
+
+def elementary_weights(a, tree: tuple, memo: dict | None = None) -> list:
+    """Φ_j(t) for every stage j: Φ(leaf) = 1, Φ([t1..tm]) = Π_k A Φ(t_k) componentwise (``memo``
+    keeps A Φ of the subtrees already seen)."""
+    memo = {} if memo is None else memo
+    s = len(a)
+    v = [1] * s
+    for child in tree:
+        if child not in memo:
+            pc = elementary_weights(a, child, memo)
+            memo[child] = [sum(a[i][j] * pc[j] for j in range(s) if a[i][j] != 0) for i in range(s)]
+        v = [x * y for x, y in zip(v, memo[child])]
+    return v
+
+
+# -- the record -------------------------------------------------------------------------------------
+
+
+def _poly_mul(p, q):
+    out = [0] * (len(p) + len(q) - 1)
+    for i, x in enumerate(p):
+        for j, y in enumerate(q):
+            out[i + j] += x * y
+    return out
+
+
+@dataclass(frozen=True)
+class DenseOutput:
+    """A pair's continuous extension: the rows d of F3, F4, ... over all stages (the pair's, then
+    the extra ones), and the extra stages (rows of A over every earlier stage, and c)."""
+
+    order: int
+    d: tuple[tuple, ...]
+    extra_a: tuple[tuple, ...] = ()
+    extra_c: tuple = ()
+    reference: str = ""
+
+    @property
+    def extra_stages(self) -> int:
+        """f-evaluations per step beyond the pair's own (DOP853: 3), as Hairer counts them."""
+        return len(self.extra_a)
+
+    @property
+    def degree(self) -> int:
+        return 3 + len(self.d)
+
+    def stages_a(self, tab) -> list[list]:
+        """A over all stages: the pair's tableau (its last row is b: f(y1)), then the extra rows."""
+        total = tab.stages + self.extra_stages
+        rows = [list(r) + [0] * self.extra_stages for r in tab.a]
+        rows += [list(r) + [0] * (total - len(r)) for r in self.extra_a]
+        return rows
+
+    def weights(self, tab, num=Fraction) -> list[list]:
+        """b_j(θ) as polynomial coefficients in θ (index = power), for every stage j, in the number
+        type ``num`` (float for float data: exact rationals of doubles are slow to multiply)."""
+        s, total = tab.stages, tab.stages + self.extra_stages
+        nest, cur = [], [1]                    # θ, θ(1-θ), θ²(1-θ), θ²(1-θ)², ...
+        for r in range(self.degree):
+            cur = _poly_mul(cur, [0, 1] if r % 2 == 0 else [1, -1])
+            nest.append(cur)
+        out = []
+        for j in range(total):
+            b = num(tab.b[j]) if j < s else num(0)
+            coeff = [b, int(j == 0) - b, 2 * b - int(j == 0) - int(j == s - 1)]
+            coeff += [num(row[j]) for row in self.d]
+            poly = [0] * (self.degree + 1)
+            for r, c in enumerate(coeff):
+                for p, x in enumerate(nest[r]):
+                    poly[p] += c * x
+            out.append(poly)
+        return out
+
+    def residuals(self, tab, order: int) -> list[float]:
+        """max over trees t with |t| = k and powers of θ of |Σ_j b_j(θ) Φ_j(t) - θ^k / γ(t)|,
+        for k = 1..order (all zero up to the extension's order)."""
+        floats = any(isinstance(x, float) for row in self.d + self.extra_a for x in row)
+        num = float if floats else Fraction
+        a = [[num(x) for x in row] for row in self.stages_a(tab)]
+        w = self.weights(tab, num)
+        out, memo = [], {}
+        for k, trees in sorted(rooted_trees(order).items()):
+            worst = 0
+            for tree in trees:
+                phi = elementary_weights(a, tree, memo)
+                for p in range(self.degree + 1):
+                    got = sum(w[j][p] * phi[j] for j in range(len(phi)))
+                    worst = max(worst, abs(got - (Fraction(1, density(tree)) if p == k else 0)))
+            out.append(float(worst))
+        return out
+
+    def check(self, tab, tol_float: float = 1e-11) -> None:
+        """Raise ValueError unless the extension fits the tableau and has its stated order.
+
+        Rational data must satisfy the conditions exactly. DOP853's are 30-digit decimals rounded to
+        doubles, with d entries up to 5e2 that cancel: the residuals measure 4.3e-12, hence
+        ``tol_float``; a wrong digit in any coefficient gives residuals > 1e-3."""
+        s, total = tab.stages, tab.stages + self.extra_stages
+        if tab.c[s - 1] != 1 or list(tab.a[s - 1]) != list(tab.b):
+            raise ValueError("dense output needs a tableau whose last stage is f(y1)")
+        if len(self.extra_c) != self.extra_stages:
+            raise ValueError("extra stages: one c per row")
+        if any(len(row) != total for row in self.d):
+            raise ValueError("each row of d covers every stage, extra ones included")
+        for i, (row, c) in enumerate(zip(self.extra_a, self.extra_c)):
+            if len(row) != s + i or abs(sum(row) - c) > 1e-14:
+                raise ValueError(f"extra stage {i}: a row over the {s + i} earlier stages summing to c")
+        exact = not any(isinstance(x, float) for row in self.d + self.extra_a for x in row)
+        for k, r in enumerate(self.residuals(tab, self.order), start=1):
+            if r > (0 if exact else tol_float):
+                raise ValueError(f"dense output: order-{k} condition fails (residual {r:.3g})")
+
+
+# -- code generation --------------------------------------------------------------------------------
+
+
+def generate_dense(dense: DenseOutput, tab, count: int, n: int) -> tuple[str, set[int]]:
+    """Source of ``dense_from_stages``, ``dense_eval`` and ``dense_slope`` for an n-dimensional
+    cell, and the arities of the ``erk_lc`` helpers it uses.
+
+    ``dense_from_stages(y, y1, h, par, ks, f1)`` takes the ``count`` stages the step computed
+    (``ks``) and f(y1), evaluates the extra stages, and returns the coefficients (y0, F0, F1, ...).
+    ``dense_eval(cf, θ)`` is u(θ) (Hairer's CONTD5/CONTD8 nesting); ``dense_slope(cf, θ)`` is
+    du/dθ (= h u'(t) in time), for Newton on a section function.
+    """
+    s, comma = tab.stages, "," if n == 1 else ""
+    a_all = dense.stages_a(tab)
+    arities: set[int] = set()
+    unpack = ", ".join(f"k{j}" for j in range(count)) + ("," if count == 1 else "")
+    lines = ["\n@njit(cache=True)\ndef dense_from_stages(y, y1, h, par, ks, f1):",
+             f"    {unpack} = ks", f"    k{s - 1} = f1"]
+    for i in range(s, s + dense.extra_stages):
+        terms = [(a_all[i][j], j) for j in range(i) if a_all[i][j] != 0]
+        arities.add(len(terms))
+        args = ", ".join(f"{lit(c)}, k{j}" for c, j in terms)
+        lines.append(f"    k{i} = f(erk_lc{len(terms)}(y, h, {args}), par)")
+
+    def tup(items):
+        return "(" + ", ".join(items) + comma + ")"
+
+    lines.append("    dy = " + tup(f"y1[{i}] - y[{i}]" for i in range(n)))
+    lines.append("    bspl = " + tup(f"h * k0[{i}] - dy[{i}]" for i in range(n)))
+    lines.append("    curv = " + tup(f"dy[{i}] - h * k{s - 1}[{i}] - bspl[{i}]" for i in range(n)))
+    names = ["y", "dy", "bspl", "curv"]
+    for r, row in enumerate(dense.d):
+        terms = [(c, j) for j, c in enumerate(row) if c != 0]
+        lines.append(f"    dd{r} = " + tup("h * (" + " + ".join(f"{lit(c)} * k{j}[{i}]" for c, j in terms)
+                                            + ")" for i in range(n)))
+        names.append(f"dd{r}")
+    lines.append(f"    return ({', '.join(names)})")
+
+    m = dense.degree
+    cf = ", ".join(f"c{r}" for r in range(m + 1))
+
+    def nested(i, r=0):
+        w = "theta" if r % 2 == 0 else "s1"
+        inner = f"c{r + 1}[{i}]" if r == m - 1 else f"(c{r + 1}[{i}] + {nested(i, r + 1)})"
+        return f"{w} * {inner}"
+
+    lines += ["\n@njit(cache=True)\ndef dense_eval(cf, theta):", "    s1 = 1.0 - theta",
+              f"    {cf} = cf", "    return " + tup(f"c0[{i}] + {nested(i)}" for i in range(n))]
+    # du/dθ by forward differentiation of the nesting S_r = w_r (F_r + S_{r+1}), w_r = θ or 1 - θ
+    lines += ["\n@njit(cache=True)\ndef dense_slope(cf, theta):", "    s1 = 1.0 - theta",
+              f"    {cf} = cf"]
+    for i in range(n):
+        last = m - 1
+        w, sign = ("theta", "") if last % 2 == 0 else ("s1", "-")
+        lines += [f"    v = c{m}[{i}]", f"    s = {w} * v", f"    ds = {sign}v"]
+        for r in range(m - 2, -1, -1):
+            w, sign = ("theta", "") if r % 2 == 0 else ("s1", "-")
+            lines += [f"    v = c{r + 1}[{i}] + s", f"    ds = {sign}v + {w} * ds", f"    s = {w} * v"]
+        lines.append(f"    du{i} = ds")
+    lines.append("    return " + tup(f"du{i}" for i in range(n)))
+    return "\n".join(lines) + "\n", arities
