@@ -43,6 +43,8 @@ class Method:
 
     ``needs`` lists the problem structure the method requires: ``partition`` (two blocks u, v as in
     [HLW] (1.8)). ``symplectic`` means symplectic for Hamiltonian problems in canonical partition.
+    ``field_modifiers_refused``, when set, says why the method cannot integrate a field changed by a
+    modifier (observer, penalty); the spec parser then refuses such a modifier at validation.
     """
 
     id: str
@@ -57,6 +59,7 @@ class Method:
     symmetric: bool = False
     needs: tuple[str, ...] = ()
     explicit_when: str = ""          # e.g. "separable": explicit for problems with that structure
+    field_modifiers_refused: str = ""  # why the method cannot take +observer/+penalty ("" if it can)
     data: Any = None
     aliases: tuple[str, ...] = field(default=())
 

@@ -41,6 +41,7 @@ class Context:
     explicit_u: bool
     explicit_v: bool
     extra: dict = field(default_factory=dict)
+    problem: Any = None        # the problem record, for methods built from its model (generating-function4)
 
 
 def template(func, rename: dict[str, str] | None = None) -> str:
@@ -113,7 +114,7 @@ def module_source(problem, method_cfg) -> tuple[str, dict]:
     fields = [m for m in mods if m.record.kind == "field"]
     ctx = Context(n=meta["n"], meta=meta, values=method_cfg.base.values, modified=bool(fields),
                   explicit_u=meta["explicit_u"] and not fields,
-                  explicit_v=meta["explicit_v"] and not fields)
+                  explicit_v=meta["explicit_v"] and not fields, problem=problem.record)
     offsets = []
     off = len(problem.record.model_params)
     for m in mods:

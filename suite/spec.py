@@ -121,6 +121,9 @@ def parse_method(text: str, problem: Bound | None = None) -> MethodConfig:
         if mname not in MODIFIERS:
             raise unknown("modifier", mname, MODIFIERS)
         mrec = MODIFIERS[mname]
+        if mrec.kind == "field" and rec.field_modifiers_refused:
+            raise UserError(f"method {name} cannot take a field modifier (+{mname}): "
+                            f"{rec.field_modifiers_refused}; use +projection, or another method")
         values = bind(mrec.params, mgiven, f"modifier {mname}")
         if problem is not None:
             values = mrec.resolve(values, problem)

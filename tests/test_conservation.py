@@ -104,7 +104,9 @@ def _applies(pid, mid) -> bool:
 
 
 def _symplectic_rk(m):
-    return m.symplectic and "partition" not in m.needs
+    # Runge-Kutta only: other symplectic one-step maps (generating-function4) need not conserve
+    # quadratic integrals, e.g. the oscillator's H
+    return m.symplectic and m.family == "implicit-rk"
 
 
 def _symplectic_partitioned(m):
