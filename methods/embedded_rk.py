@@ -175,7 +175,7 @@ def generate_adaptive(pair: Pair):
                   f"FAC1 = {pair.fac1!r}\nFAC2 = {pair.fac2!r}\nDENSE_NFEV = {dense_nfev!r}\n"
                   f"\n@njit(cache=True)\ndef to_tuple_shift(y, h, v):\n    return ({shift}{comma})\n")
         return (consts + helpers(n, arities) + "\n".join(body) + "\n"
-                + template(adaptive.initial_step)
+                + template(adaptive.initial_step) + template(adaptive.first_step)
                 + template(adaptive.integrate_adaptive, {"DENSE_OUTPUT": "False"}) + dense_src)
     return generate
 

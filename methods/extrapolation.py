@@ -80,6 +80,7 @@ def _generate(data: Extrapolation):
                + template(extrapolation.make_ws) + template(extrapolation.step))
         if kmax:
             src += (template(adaptive.initial_step, {"IORD": "HINIT_ORDER"})
+                    + template(adaptive.first_step)
                     + template(extrapolation.column)
                     + template(extrapolation.integrate_adaptive))
         return src

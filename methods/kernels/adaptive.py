@@ -71,6 +71,14 @@ def initial_step(y, fy, par, hmax, rtol, atol):
     return min(100.0 * abs(h), h1, hmax)
 
 
+def first_step(y, fy, par, h0, hmax, rtol, atol):
+    """The first step (h0 if given, capped by hmax, else HINIT) and the f-evaluations so far:
+    f(y0), plus HINIT's probe."""
+    if h0 > 0.0:
+        return min(h0, hmax), 1.0
+    return initial_step(y, fy, par, hmax, rtol, atol), 2.0
+
+
 def dense_coeffs(y, h, par, fy):
     """The accepted step from y of size h (fy = f(y)), recomputed by the operations of step_err
     (so y1 is the driver's, bit for bit), and its continuous extension: (y1, (y0, F0, F1, ...))."""
@@ -92,12 +100,7 @@ def integrate_adaptive(y_io, st, par, t_end, h0, hmax, rtol, atol, every, dt_out
     row = 0
     if st[7] == 0.0:
         fy = f(y, par)
-        st[6] = 1.0
-        if h0 > 0.0:
-            st[1] = min(h0, hmax)
-        else:
-            st[1] = initial_step(y, fy, par, hmax, rtol, atol)
-            st[6] += 1.0
+        st[1], st[6] = first_step(y, fy, par, h0, hmax, rtol, atol)
         st[0] = 0.0
         st[2] = 1.0e-4
         st[7] = 1.0

@@ -40,7 +40,7 @@ def _unbound(*args):  # pragma: no cover - only reached if a template is called 
     raise RuntimeError("kernel template called outside a generated module")
 
 
-initial_step = scaled = _unbound      # adaptive.initial_step; scaled(a, v) -> a v as a tuple
+first_step = scaled = _unbound        # adaptive.first_step; scaled(a, v) -> a v as a tuple
 
 
 def gragg_column(y, fy, h, nj, par, T, row, check, rtol, atol):
@@ -142,12 +142,9 @@ def integrate_adaptive(y_io, st, par, t_end, h0, hmax, rtol, atol, every, dt_out
     row = 0
     if st[7] == 0.0:
         fy = f(y, par)
-        st[6] = 1.0
-        if h0 > 0.0:
-            st[1] = min(h0, hmax)
-        else:
-            st[1] = min(initial_step(y, fy, par, hmax, rtol, atol), 0.5 * t_end)
-            st[6] += 1.0
+        st[1], st[6] = first_step(y, fy, par, h0, hmax, rtol, atol)
+        if h0 <= 0.0:
+            st[1] = min(st[1], 0.5 * t_end)
         st[0] = 0.0
         st[2] = max(2, min(KMAX - 1, int(-math.log10(rtol + 1.0e-40) * 0.6 + 1.5)))
         st[3] = 0.0
