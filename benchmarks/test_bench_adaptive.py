@@ -11,8 +11,7 @@ from __future__ import annotations
 import math
 
 import pytest
-
-from suite.bench import ADAPTIVE_PERIODS, ADAPTIVE_TOL, adaptive_cell, run_adaptive
+from gnibench.suite.runs.bench import ADAPTIVE_PERIODS, ADAPTIVE_TOL, adaptive_cell, run_adaptive
 
 
 @pytest.mark.parametrize("method", ["dopri5", "dop853"])

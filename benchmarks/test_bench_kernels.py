@@ -9,8 +9,7 @@ fastest round's wall time per step, as in ``gnibench bench``.
 from __future__ import annotations
 
 import pytest
-
-from suite.bench import H, compiled_cell, run_steps
+from gnibench.suite.runs.bench import H, compiled_cell, run_steps
 
 STEPS = 200_000
 

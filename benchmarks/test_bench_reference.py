@@ -12,9 +12,8 @@ import math
 
 import numpy as np
 import pytest
-
-from suite.reference import cache_path, parse_reference, reference_solution
-from suite.spec import parse_problem
+from gnibench.suite.cell.reference import cache_path, parse_reference, reference_solution
+from gnibench.suite.cell.spec import parse_problem
 
 T_GRID = np.linspace(0.0, 10 * 2 * math.pi, 101)
 SPEC = "heyoka:precision=real128"

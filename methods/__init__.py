@@ -1,6 +1,6 @@
 """The method and modifier registries: one line each. A new method is data in its family's file
 plus one line here."""
-from methods import (
+from gnibench.methods import (
                      compositions,
                      embedded_rk,
                      explicit_rk,

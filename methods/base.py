@@ -3,7 +3,7 @@
 ``gnibench list methods``, the spec parser, the structure checks and the registry-wide tests are all
 driven by these records. Each record also carries ``generate(ctx) -> str``: the numba source of its
 ``make_ws()`` and ``step(y, h, par, ws) -> (y1, nfev, njev, status)`` for one cell (see
-:mod:`suite.codegen`).
+:mod:`gnibench.suite.cell.codegen`).
 """
 from __future__ import annotations
 
@@ -11,8 +11,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from suite.errors import UserError
-from suite.params import Param
+from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.params import Param
 
 H_PARAM = Param("h", 0.01, "step size", low=0.0, low_open=True)
 NEWTON_PARAMS = (

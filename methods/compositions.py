@@ -8,8 +8,8 @@ methods/partitioned.py (explicit for separable problems, Newton otherwise).
 """
 from __future__ import annotations
 
-from methods.base import H_PARAM, NEWTON_PARAMS, Method
-from methods.partitioned import _block
+from gnibench.methods.base import H_PARAM, NEWTON_PARAMS, Method
+from gnibench.methods.partitioned import _block
 
 
 def _symmetric(w):

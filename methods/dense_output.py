@@ -16,7 +16,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from fractions import Fraction
 
-from methods.tableau import lit
+from gnibench.methods.tableau import lit
 
 # -- order conditions -------------------------------------------------------------------------------
 

@@ -12,14 +12,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 from fractions import Fraction as Fr
 
-import methods.dop853_coefficients as dop853_data
-from methods.base import Method, adaptive_params
-from methods.dense_output import DenseOutput, generate_dense
-from methods.explicit_rk import combination, generate_erk, helpers, stage_lines
-from methods.kernels import adaptive
-from methods.tableau import Tableau, lit, tableau
-from suite.codegen import template
-from suite.params import Param
+import gnibench.methods.dop853_coefficients as dop853_data
+from gnibench.methods.base import Method, adaptive_params
+from gnibench.methods.dense_output import DenseOutput, generate_dense
+from gnibench.methods.explicit_rk import combination, generate_erk, helpers, stage_lines
+from gnibench.methods.kernels import adaptive
+from gnibench.methods.tableau import Tableau, lit, tableau
+from gnibench.suite.foundation.params import Param
+from gnibench.suite.foundation.templates import template
 
 
 @dataclass(frozen=True)

@@ -6,8 +6,8 @@ Adding a method: a tableau here and one line in :mod:`methods`.
 """
 from __future__ import annotations
 
-from methods.base import Method
-from methods.tableau import Tableau, lit, tableau
+from gnibench.methods.base import Method
+from gnibench.methods.tableau import Tableau, lit, tableau
 
 EULER = tableau([[0]], [1], [0], order=1)                               # [HLW] (1.5)
 RK4 = tableau([[0, 0, 0, 0], ["1/2", 0, 0, 0], [0, "1/2", 0, 0], [0, 0, 1, 0]],

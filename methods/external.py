@@ -1,7 +1,7 @@
 """External engines as competitor methods: heyoka's Taylor method, rebound's IAS15 and WHFast.
 
 They are not compiled gnibench kernels. Each record carries ``run(problem_bound, values, grid) ->
-EngineRun`` (:mod:`suite.engines`, :mod:`suite.nbody`), and :func:`suite.solve.solve` calls it
+EngineRun`` (:mod:`gnibench.methods.engines.heyoka`, :mod:`gnibench.methods.engines.rebound`), and :func:`gnibench.suite.cell.solve.solve` calls it
 instead of the compiled driver. The output has the same columns as any other method (t, states, err_<I>, global_error,
 steps, nfev).
 
@@ -29,9 +29,9 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from methods.base import Method
-from suite.errors import UserError
-from suite.params import Param
+from gnibench.methods.base import Method
+from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.params import Param
 
 DT_OUT = Param("dt_out", 0.01, "output sampling interval (the engine picks its own steps)",
                low=0.0, low_open=True)
@@ -45,8 +45,8 @@ def _not_compiled(ctx) -> str:
 class ExternalMethod(Method):
     """A method run by an external engine.
 
-    ``run(problem_bound, values, grid) -> suite.engines.EngineRun`` integrates onto the sample grid
-    (:class:`suite.solve.SampleGrid`). ``grid_param`` names the option that spaces that grid (``h``
+    ``run(problem_bound, values, grid) -> gnibench.methods.engines.heyoka.EngineRun`` integrates onto the sample grid
+    (:class:`gnibench.suite.cell.solve.SampleGrid`). ``grid_param`` names the option that spaces that grid (``h``
     or ``dt_out``). ``requires(problem_record)`` raises a UserError for problems the engine cannot
     take.
     """
@@ -74,32 +74,32 @@ class ExternalMethod(Method):
 
 
 def _run_heyoka(problem_bound, values, grid):
-    from suite.engines import heyoka_propagate
+    from gnibench.methods.engines.heyoka import heyoka_propagate
 
     return heyoka_propagate(problem_bound, grid.t, values["precision"], values["tol"])
 
 
 def _run_ias15(problem_bound, values, grid):
-    from suite.nbody import rebound_propagate
+    from gnibench.methods.engines.rebound import rebound_propagate
 
     return rebound_propagate(problem_bound, grid.t, "ias15", epsilon=values["epsilon"])
 
 
 def _run_whfast(problem_bound, values, grid):
-    from suite.nbody import rebound_propagate
+    from gnibench.methods.engines.rebound import rebound_propagate
 
     return rebound_propagate(problem_bound, grid.t, "whfast", h=grid.h, step_counts=grid.step,
                              h_last=grid.h_last)
 
 
 def _heyoka_problem(problem) -> None:
-    from suite.engines import check_heyoka
+    from gnibench.methods.engines.heyoka import check_heyoka
 
     check_heyoka(problem)
 
 
 def _rebound_problem(problem) -> None:
-    from suite.nbody import adapter
+    from gnibench.methods.engines.rebound import adapter
 
     adapter(problem)
 

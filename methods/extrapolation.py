@@ -12,10 +12,10 @@ from __future__ import annotations
 import itertools
 from dataclasses import dataclass
 
-from methods.base import Method, adaptive_params
-from methods.kernels import adaptive, extrapolation
-from suite.codegen import template
-from suite.params import Param
+from gnibench.methods.base import Method, adaptive_params
+from gnibench.methods.kernels import adaptive, extrapolation
+from gnibench.suite.foundation.params import Param
+from gnibench.suite.foundation.templates import template
 
 
 @dataclass(frozen=True)

@@ -46,11 +46,11 @@ import sys
 from dataclasses import dataclass
 from types import SimpleNamespace
 
-from methods.base import H_PARAM, NEWTON_PARAMS, Method
-from methods.kernels import genfun
-from suite.cache import cache_dir, write_atomic
-from suite.codegen import template
-from suite.errors import UserError
+from gnibench.methods.base import H_PARAM, NEWTON_PARAMS, Method
+from gnibench.methods.kernels import genfun
+from gnibench.suite.foundation.cache import cache_dir, write_atomic
+from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.templates import template
 
 ORDER = 4
 
@@ -102,8 +102,7 @@ def _symbols(problem):
 def _emit(name, args, unpack, ps, exprs, matrix=None) -> list[str]:
     """A numba function returning the tuple ``exprs`` (and filling M[i, j] = matrix[i][j])."""
     import sympy as sp
-
-    from problems.codegen import _num, _printer
+    from gnibench.problems.codegen import _num, _printer
 
     printer = _printer()
     flat = list(exprs) + ([e for row in matrix for e in row] if matrix else [])
@@ -165,7 +164,7 @@ _texts: dict[str, str] = {}
 
 def generating_code(problem) -> str:
     """The generated text for a problem, from memory, the disk cache, or freshly from sympy."""
-    from problems.codegen import _source_hash
+    from gnibench.problems.codegen import _source_hash
 
     source = _source_hash(problem) + inspect.getsource(sys.modules[__name__])
     digest = hashlib.sha256(source.encode()).hexdigest()[:16]

@@ -8,10 +8,10 @@ from __future__ import annotations
 
 from fractions import Fraction as Fr
 
-from methods.base import H_PARAM, NEWTON_PARAMS, Method
-from methods.kernels import irk
-from methods.tableau import Tableau, lit, tableau
-from suite.codegen import template
+from gnibench.methods.base import H_PARAM, NEWTON_PARAMS, Method
+from gnibench.methods.kernels import irk
+from gnibench.methods.tableau import Tableau, lit, tableau
+from gnibench.suite.foundation.templates import template
 
 IMPLICIT_EULER = tableau([[1]], [1], [1], order=1)                      # [HLW] (1.6)
 IMPLICIT_MIDPOINT = tableau([["1/2"]], [1], ["1/2"], order=2)           # [HLW] (1.7)

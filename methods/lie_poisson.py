@@ -51,10 +51,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from methods.base import H_PARAM, Method
-from methods.compositions import YOSHIDA4
-from suite.errors import UserError
-from suite.params import Param
+from gnibench.methods.base import H_PARAM, Method
+from gnibench.methods.compositions import YOSHIDA4
+from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.params import Param
 
 # ROTATIONS[i] = the two planes (a, b), a' = ω b, b' = -ω a, rotated by the flow of (1/2) λ_i x_i²
 ROTATIONS = (
@@ -150,8 +150,7 @@ def _is_so4(problem) -> bool:
         return False
     if problem.id not in _SO4_CHECKED:
         import sympy as sp
-
-        from problems.codegen import symbolic
+        from gnibench.problems.codegen import symbolic
 
         ys, ps, rhs, _ = symbolic(problem)
         _SO4_CHECKED[problem.id] = all(sp.expand(f - g) == 0

@@ -31,9 +31,9 @@ round-off, since the residual it drives to zero is exact.
 """
 from __future__ import annotations
 
-from methods.base import Modifier
-from suite.errors import UserError
-from suite.params import Param
+from gnibench.methods.base import Modifier
+from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.params import Param
 
 _COMMON = (
     Param("mode", "simple", "simple: constant gains theta; normalized: gains from alpha, beta",
@@ -55,7 +55,7 @@ _COMMON = (
 
 def _resolve(kind):
     def resolve(values, problem):
-        from problems.codegen import problem_meta
+        from gnibench.problems.codegen import problem_meta
 
         meta = problem_meta(problem.record)
         names, pnames = meta["integrals"], meta.get("partial_integrals", [])
@@ -114,8 +114,7 @@ def _check_closed(meta, partial, kind) -> None:
 def _check_independent(problem, names, on, kind, partial=()) -> None:
     """[B] §2 assumes rank D_H = q on Γ; refuse observed integrals that are dependent at y0."""
     import numpy as np
-
-    from problems.codegen import problem_meta, python_functions
+    from gnibench.problems.codegen import problem_meta, python_functions
 
     fns = python_functions(problem.record)
     y0 = problem.record.y0(problem.values)

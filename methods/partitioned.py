@@ -8,9 +8,9 @@ block's field does not depend on the block); otherwise Newton solves it (kernels
 """
 from __future__ import annotations
 
-from methods.base import H_PARAM, NEWTON_PARAMS, Method
-from methods.kernels import partitioned
-from suite.codegen import template
+from gnibench.methods.base import H_PARAM, NEWTON_PARAMS, Method
+from gnibench.methods.kernels import partitioned
+from gnibench.suite.foundation.templates import template
 
 
 def _explicit_block(name: str, n: int, i_idx, e_idx) -> str:

@@ -8,9 +8,9 @@ methods/kernels/newton.py); no convergence in ``maxit`` iterations is status ``n
 """
 from __future__ import annotations
 
-from methods.base import Modifier
-from methods.modifiers import _cholesky, _dot, _resolve, _solve
-from suite.params import Param
+from gnibench.methods.base import Modifier
+from gnibench.methods.modifiers import _cholesky, _dot, _resolve, _solve
+from gnibench.suite.foundation.params import Param
 
 _PARAMS = (
     Param("on", None, "integrals to project on (default: all of the problem's)", kind="names"),

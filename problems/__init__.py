@@ -1,5 +1,5 @@
 """The problem registry: one line per problem. A new problem is one file plus one line here."""
-from problems import (
+from gnibench.problems import (
     double_oscillator,
     euler_so4,
     gavrilov_shilnikov,

@@ -2,7 +2,7 @@
 
 A problem module defines a :class:`Problem` whose ``model`` builds sympy expressions: either a
 Hamiltonian in canonical variables ([HLW] (1.10): p' = -H_q, q' = H_p) or an explicit right-hand
-side, plus its named first integrals. From that single source :mod:`problems.codegen` derives the
+side, plus its named first integrals. From that single source :mod:`gnibench.problems.codegen` derives the
 compiled vector field, its Jacobian, the integrals and their gradients D_H, and the partition
 structure. Exact solutions, where known, are plain numpy functions of the same record.
 """
@@ -12,8 +12,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from suite.errors import UserError
-from suite.params import Param
+from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.params import Bound, Param
 
 
 @dataclass(frozen=True)
@@ -156,7 +156,6 @@ class Problem:
         """The Bound of the transformed problem when this problem's transform is switched on."""
         if self.transform is None or not values.get(self.transform.option):
             return None
-        from suite.spec import Bound
 
         rec = self.transform.problem
         tvalues = {p.name: p.default for p in rec.params}
@@ -175,7 +174,7 @@ class Problem:
         return out
 
     def describe(self) -> dict:
-        from problems.codegen import problem_meta
+        from gnibench.problems.codegen import problem_meta
 
         meta = problem_meta(self)
         return {

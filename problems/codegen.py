@@ -8,7 +8,7 @@ The generated text defines, with the state ``y`` a tuple of N floats and ``par``
 * ``grad_<k>(y, par) -> tuple``         its gradient, row k of D_H ([B] §2);
 * ``invariants(y, par) -> tuple``       all integrals;
 * ``section_g_<j>``, ``section_grad_<j>``, ``section_cond_<j>`` (y, par): g, grad g and the crossing
-  condition of the problem's j-th Poincaré section (:mod:`suite.sections`).
+  condition of the problem's j-th Poincaré section (:mod:`gnibench.suite.cell.sections`).
 
 The text and a small JSON of metadata are cached on disk, keyed by the hash of the sources that
 produce them, so that a warm run never imports sympy.
@@ -21,13 +21,13 @@ import json
 import sys
 from types import SimpleNamespace
 
-from suite.cache import cache_dir, write_atomic
+from gnibench.suite.foundation.cache import cache_dir, write_atomic
 
 
 def _source_hash(problem) -> str:
     mod = sys.modules[problem.model.__module__]
     h = hashlib.sha256()
-    for obj in (mod, sys.modules[__name__], sys.modules["problems.base"]):
+    for obj in (mod, sys.modules[__name__], sys.modules["gnibench.problems.base"]):
         h.update(inspect.getsource(obj).encode())
     h.update(problem.id.encode())
     return h.hexdigest()[:16]

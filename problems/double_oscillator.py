@@ -7,8 +7,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-
-from problems.base import Model, Problem
+from gnibench.problems.base import Model, Problem
 
 
 def model(S):

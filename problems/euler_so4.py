@@ -35,9 +35,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-
-from problems.base import Model, Problem, Section, require
-from suite.params import Param
+from gnibench.problems.base import Model, Problem, Section, require
+from gnibench.suite.foundation.params import Param
 
 LAMBDA = (1.0, 5.0, 2.0, 1.0, 3.0, 4.0)          # [B] (7.3)
 LEVEL = (1.0, 15.0, 25.0)                         # [B] (7.4)

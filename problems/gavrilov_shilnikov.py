@@ -19,8 +19,8 @@ from __future__ import annotations
 
 import math
 
-from problems.base import Model, Problem, Section
-from suite.params import Param
+from gnibench.problems.base import Model, Problem, Section
+from gnibench.suite.foundation.params import Param
 
 
 def model(S):

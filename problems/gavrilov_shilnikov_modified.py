@@ -13,9 +13,9 @@ from __future__ import annotations
 
 import math
 
-from problems.base import Model, Problem, require
-from problems.gavrilov_shilnikov import SECTION
-from suite.params import Param
+from gnibench.problems.base import Model, Problem, require
+from gnibench.problems.gavrilov_shilnikov import SECTION
+from gnibench.suite.foundation.params import Param
 
 
 def model(S):

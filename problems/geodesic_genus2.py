@@ -24,8 +24,8 @@ from __future__ import annotations
 
 import math
 
-from problems.base import Boundary, Model, Problem, require
-from suite.params import Param
+from gnibench.problems.base import Boundary, Model, Problem, require
+from gnibench.suite.foundation.params import Param
 
 BETA = math.pi / 8
 R0 = math.sin(BETA) / (math.cos(BETA) + math.sqrt(math.cos(2 * BETA)))     # [B] §8.1

@@ -2,8 +2,7 @@
 from __future__ import annotations
 
 import numpy as np
-
-from problems.base import Model, Problem
+from gnibench.problems.base import Model, Problem
 
 
 def model(S):

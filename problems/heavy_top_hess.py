@@ -32,8 +32,8 @@ from __future__ import annotations
 
 import math
 
-from problems.base import Model, Problem, require
-from suite.params import Param
+from gnibench.problems.base import Model, Problem, require
+from gnibench.suite.foundation.params import Param
 
 
 def axis(A, B, C, sqrt=math.sqrt):

@@ -14,8 +14,8 @@ from __future__ import annotations
 
 import math
 
-from problems.base import Model, Problem, Section, require
-from suite.params import Param
+from gnibench.problems.base import Model, Problem, Section, require
+from gnibench.suite.foundation.params import Param
 
 
 def model(S):

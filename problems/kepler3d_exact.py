@@ -2,7 +2,7 @@
 
 The orbit's plane is spanned by the unit vector P towards the pericenter (along the Laplace vector
 e, [B] (5.1)) and Q = c/|c| x P. In that basis the motion is the planar Kepler motion of
-:func:`problems.kepler_exact.kepler_orbit_2d`, so the 3-D solution reuses Kepler's equation there.
+:func:`gnibench.problems.kepler_exact.kepler_orbit_2d`, so the 3-D solution reuses Kepler's equation there.
 
 Elements follow the usual convention: the inclination i is the angle between c and the q3-axis
 (the OCR'd text of [B] §5.1 says "the q1-axis", a slip: the line of nodes is the intersection with
@@ -12,8 +12,7 @@ mean anomaly. Position = R3(Ω) R1(i) R3(ω) (perifocal position).
 from __future__ import annotations
 
 import numpy as np
-
-from problems.kepler_exact import kepler_orbit_2d, solve_kepler
+from gnibench.problems.kepler_exact import kepler_orbit_2d, solve_kepler
 
 
 def _rotation(i: float, Omega: float, omega: float) -> np.ndarray:

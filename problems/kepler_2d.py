@@ -9,10 +9,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-
-from problems.base import Model, Problem, require
-from problems.kepler_exact import kepler_orbit_2d
-from suite.params import Param
+from gnibench.problems.base import Model, Problem, require
+from gnibench.problems.kepler_exact import kepler_orbit_2d
+from gnibench.suite.foundation.params import Param
 
 
 def model(S):

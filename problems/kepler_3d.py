@@ -5,7 +5,7 @@ e = p x c/mu - q/|q|  [B] (5.1); c_sq = c.c is the second observed integral of [
 
 Default orbit [B] §5.2: a = 1, e = 0.8, Omega = omega = pi/2, i = pi/4, mu = 4 pi^2 (period 1), start at
 the pericenter (mean anomaly M0 = 0). The initial point is built from these elements
-(:func:`problems.kepler3d_exact.state_from_elements`), with i measured from the q3-axis.
+(:func:`gnibench.problems.kepler3d_exact.state_from_elements`), with i measured from the q3-axis.
 
 The seven integrals are dependent: c.e = 0 and 2 H c^2 = mu^2 (e^2 - 1). [B] §5.1 prints
 "H c^2 = mu^2 (e^2 - 1)" without the factor 2; with a = -mu/(2H) and c^2 = mu a (1 - e^2) the
@@ -16,11 +16,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
-
-from problems import kepler_ks
-from problems.base import Model, Problem, Transform, require
-from problems.kepler3d_exact import kepler_orbit_3d, state_from_elements
-from suite.params import Param
+from gnibench.problems import kepler_ks
+from gnibench.problems.base import Model, Problem, Transform, require
+from gnibench.problems.kepler3d_exact import kepler_orbit_3d, state_from_elements
+from gnibench.suite.foundation.params import Param
 
 
 def model(S):

@@ -14,9 +14,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-
-from problems.base import Model, Problem
-from suite.params import Param
+from gnibench.problems.base import Model, Problem
+from gnibench.suite.foundation.params import Param
 
 
 def ks_matrix(u):

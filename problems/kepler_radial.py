@@ -8,17 +8,16 @@ system (4.1) with H1(r, p) = (p^2 + p_phi^2/r^2)/2 - mu/r  [B] §4.1, the reduce
 H0 r^2 + mu r - p_phi^2/2 = 0, i.e. r = (1 - sqrt 0.2)/0.8 = 0.69098..., eccentricity sqrt 0.2.
 
 Exact solution: the planar Kepler orbit with the same H and L = p_phi through q = (r0, 0),
-p = (p0, p_phi/r0) gives r(t) = |q(t)| and p_r(t) = q.p/|q| (:mod:`problems.kepler_exact`).
+p = (p0, p_phi/r0) gives r(t) = |q(t)| and p_r(t) = q.p/|q| (:mod:`gnibench.problems.kepler_exact`).
 """
 from __future__ import annotations
 
 import math
 
 import numpy as np
-
-from problems.base import Model, Problem, require
-from problems.kepler_exact import kepler_orbit_2d
-from suite.params import Param
+from gnibench.problems.base import Model, Problem, require
+from gnibench.problems.kepler_exact import kepler_orbit_2d
+from gnibench.suite.foundation.params import Param
 
 
 def model(S):

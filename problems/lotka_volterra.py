@@ -5,7 +5,7 @@ No closed-form solution: global errors come from a reference solution (not in th
 """
 from __future__ import annotations
 
-from problems.base import Model, Problem, require
+from gnibench.problems.base import Model, Problem, require
 
 
 def model(S):

@@ -13,8 +13,8 @@ momentum P = sum_i p_i (Px, Py, Pz). No closed-form solution.
 """
 from __future__ import annotations
 
-from problems.base import Model, Problem
-from suite.params import Param
+from gnibench.problems.base import Model, Problem
+from gnibench.suite.foundation.params import Param
 
 BODIES = ("sun", "Jupiter", "Saturn", "Uranus", "Neptune", "Pluto")
 AXES = ("x", "y", "z")

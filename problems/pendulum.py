@@ -8,8 +8,7 @@ rotation (H > 1): q = 2 s am(t/k + u0, k), p = (2 s/k) dn(t/k + u0, k), k^2 = 2/
 from __future__ import annotations
 
 import numpy as np
-
-from problems.base import Model, Problem
+from gnibench.problems.base import Model, Problem
 
 
 def model(S):

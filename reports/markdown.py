@@ -98,8 +98,7 @@ def render_summary(meta: dict, cells, timings) -> str:
 def summary_from_dir(out_dir: str | Path) -> str:
     """Render the summary of a finished (or partial) run from its Parquet files."""
     import pandas as pd
-
-    from suite.storage import read_parquet_meta
+    from gnibench.suite.runs.storage import read_parquet_meta
 
     out = Path(out_dir)
     meta = read_parquet_meta(out / "cells.parquet")

@@ -25,8 +25,8 @@ def cap(pids, n: int, registry) -> list[str]:
 @functools.cache
 def base_module(spec: str):
     """(module, problem Bound, par) of a problem's generated code (the plain euler cell)."""
-    from suite.codegen import load
-    from suite.spec import parse_method, parse_problem
+    from gnibench.suite.cell.codegen import load
+    from gnibench.suite.cell.spec import parse_method, parse_problem
 
     prob = parse_problem(spec)
     mod, _, _ = load(prob, parse_method("euler", prob))

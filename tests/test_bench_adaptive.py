@@ -2,7 +2,7 @@
 
 suite/bench_c/kepler_adaptive.c ports methods/kernels/adaptive.py and the generated step_err
 operation for operation (built with -ffp-contract=off), with the pair's coefficients written from
-the same ``Pair`` record (``suite.bench.pair_header``). So on kepler-2d the accepted and rejected
+the same ``Pair`` record (``gnibench.suite.runs.bench.pair_header``). So on kepler-2d the accepted and rejected
 step counts must be equal and the final states agree to round-off (measured: bit-identical). This
 is what makes the µs/step ratio of ``gnibench bench`` a like-for-like comparison. 10 periods,
 rtol = atol = 1e-10; skipped without gcc.
@@ -15,8 +15,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
-from suite.bench import adaptive_cell, build_c_adaptive, run_adaptive, time_c_adaptive
+from gnibench.suite.runs.bench import adaptive_cell, build_c_adaptive, run_adaptive, time_c_adaptive
 
 PERIODS = 10
 

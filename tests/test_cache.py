@@ -13,7 +13,7 @@ import sys
 
 def _solve(cache, cwd):
     env = dict(os.environ, GNIBENCH_CACHE_DIR=str(cache))
-    cmd = [sys.executable, "-m", "suite.cli", "solve", "kepler-2d", "rk4:h=0.01", "--steps", "10",
+    cmd = [sys.executable, "-m", "gnibench.suite.cli.main", "solve", "kepler-2d", "rk4:h=0.01", "--steps", "10",
            "--format", "json"]
     p = subprocess.run(cmd, env=env, cwd=cwd, capture_output=True, text=True, timeout=300,
                        check=False)

@@ -17,13 +17,12 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from gnibench import problems
+from gnibench.methods import METHODS, MODIFIERS
+from gnibench.problems import REGISTRY
+from gnibench.suite.cli.main import main
+from gnibench.suite.runs.storage import read_parquet_meta
 from support import cap
-
-import problems
-from methods import METHODS, MODIFIERS
-from problems import REGISTRY
-from suite.cli import main
-from suite.storage import read_parquet_meta
 
 GNIBENCH = Path(sys.executable).with_name("gnibench")
 OSC = "harmonic-oscillator"
@@ -155,7 +154,7 @@ def test_csv_columns_every_problem(pid, capsys):
 
     The four smallest problems by default (one compile each); all with GNIBENCH_TEST_FULL=1.
     """
-    from problems.codegen import problem_meta
+    from gnibench.problems.codegen import problem_meta
 
     rec = REGISTRY[pid]
     code, out, err = run(["solve", pid, "euler:h=1e-6", "--steps", "2"], capsys)

@@ -19,13 +19,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from gnibench import methods
+from gnibench.problems import REGISTRY
+from gnibench.problems.codegen import symbolic
+from gnibench.suite.cell.solve import prepare
+from gnibench.suite.foundation.errors import UserError
 from support import FULL, rate_scale
-
-import methods
-from problems import REGISTRY
-from problems.codegen import symbolic
-from suite.errors import UserError
-from suite.solve import prepare
 
 COMPILED = getattr(methods, "COMPILED", methods.METHODS)   # external engines have their own tests
 
@@ -115,7 +114,7 @@ def _symplectic_partitioned(m):
 
 def relative_drift(pid, mid, names, steps=STEPS):
     """max_n |I(y_n) - I(y_0)| / max_n Σ|terms of I(y_n)| for each integral."""
-    from suite.solve import solve
+    from gnibench.suite.cell.solve import solve
 
     h = 0.05 / rate_scale(pid)
     r = solve(pid, f"{mid}:h={h!r}", steps=steps, every=steps // 100)

@@ -15,14 +15,13 @@ import math
 import numpy as np
 import pandas as pd
 import pytest
-
-from methods.embedded_rk import DOP853, DOPRI5
-from suite.cli import main
-from suite.codegen import load
-from suite.errors import UserError
-from suite.sections import _adaptive_chunks
-from suite.solve import _compiled_cell, dense_output_refusal, prepare, solve
-from suite.spec import parse_method, parse_problem
+from gnibench.methods.embedded_rk import DOP853, DOPRI5
+from gnibench.suite.cell.codegen import load
+from gnibench.suite.cell.sections import _adaptive_chunks
+from gnibench.suite.cell.solve import _compiled_cell, dense_output_refusal, prepare, solve
+from gnibench.suite.cell.spec import parse_method, parse_problem
+from gnibench.suite.cli.main import main
+from gnibench.suite.foundation.errors import UserError
 
 PAIRS = {"dopri5": DOPRI5, "dop853": DOP853}
 EPS = np.finfo(float).eps

@@ -14,10 +14,9 @@ import math
 import numpy as np
 import pandas as pd
 import pytest
+from gnibench.suite.cell.solve import solve
+from gnibench.suite.cli.main import main
 from scipy.optimize import fsolve
-
-from suite.cli import main
-from suite.solve import solve
 
 H_HUGE = 1e153                  # q1 drifts by -6.25 h² per step: overflow after ~30 steps
 

@@ -23,10 +23,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from gnibench.problems import REGISTRY
+from gnibench.suite.cell.solve import solve
 from support import rate_scale
-
-from problems import REGISTRY
-from suite.solve import solve
 
 STEPS = 10_000
 RTOL = 1e-13

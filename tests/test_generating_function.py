@@ -27,6 +27,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from gnibench.methods import COMPILED, generating_function
+from gnibench.methods.generating_function import generating_terms
+from gnibench.problems import REGISTRY
+from gnibench.suite.cell.solve import prepare, solve
+from gnibench.suite.foundation.errors import UserError
 from test_orders import CELLS as ORDER_CELLS
 from test_orders import TOL as ORDER_TOL
 from test_orders import observed_order
@@ -34,12 +39,6 @@ from test_reversibility import RTOL, forth_and_back
 from test_symplectic import CELLS as SYMPLECTIC_CELLS
 from test_symplectic import TOL as SYMPLECTIC_TOL
 from test_symplectic import step_size, symplecticity_defect
-
-from methods import COMPILED, generating_function
-from methods.generating_function import generating_terms
-from problems import REGISTRY
-from suite.errors import UserError
-from suite.solve import prepare, solve
 
 MID = "generating-function4"
 DRIFT_RATIO = 2.0     # max |ΔH| last tenth / first tenth: ≈ 1 if bounded, ≈ 10 for a linear drift from 0

@@ -1,5 +1,5 @@
 """heyoka references of geodesic-genus2: the sides of the octagon Omega as terminal events, the
-identification (8.3)-(8.4) applied at each crossing (suite.engines._propagate_identified)."""
+identification (8.3)-(8.4) applied at each crossing (gnibench.methods.engines.heyoka._propagate_identified)."""
 from __future__ import annotations
 
 import dataclasses
@@ -7,13 +7,12 @@ import math
 
 import numpy as np
 import pytest
-
-from problems.geodesic_genus2 import PROBLEM, SIDE_CENTRE, inside, post_step
-from suite.cli import main
-from suite.errors import UserError
-from suite.reference import reference_solution
-from suite.solve import solve
-from suite.spec import parse_problem
+from gnibench.problems.geodesic_genus2 import PROBLEM, SIDE_CENTRE, inside, post_step
+from gnibench.suite.cell.reference import reference_solution
+from gnibench.suite.cell.solve import solve
+from gnibench.suite.cell.spec import parse_problem
+from gnibench.suite.cli.main import main
+from gnibench.suite.foundation.errors import UserError
 
 T_END = 8.0          # 7 identifications for the default initial point; chaos (Anosov) makes the
                      # compiled-vs-reference difference grow about e^{1.4 t}: 1e-8 at t = 8
@@ -87,7 +86,7 @@ def test_long_double_reference_is_closer():
 
 
 def test_no_boundary_is_refused():
-    from suite.engines import check_heyoka
+    from gnibench.methods.engines.heyoka import check_heyoka
 
     with pytest.raises(UserError, match="boundary"):
         check_heyoka(dataclasses.replace(PROBLEM, boundary=None))

@@ -27,9 +27,8 @@ from pathlib import Path
 
 import pytest
 import scipy
-
-from suite.cache import cache_dir
-from suite.solve import solve
+from gnibench.suite.cell.solve import solve
+from gnibench.suite.foundation.cache import cache_dir
 
 FORTRAN_SCIPY = "scipy==1.16.3"
 SCRIPT = Path(__file__).parent / "scripts" / "hairer_counts.py"

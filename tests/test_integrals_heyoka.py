@@ -4,11 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
-from problems import REGISTRY
-from problems.codegen import python_functions
-from suite.engines import heyoka_propagate
-from suite.spec import parse_problem
+from gnibench.methods.engines.heyoka import heyoka_propagate
+from gnibench.problems import REGISTRY
+from gnibench.problems.codegen import python_functions
+from gnibench.suite.cell.spec import parse_problem
 
 HORIZON = {"outer-solar-system": 2000.0, "geodesic-genus2": 0.3}   # geodesic: before leaving Ω
 

@@ -3,9 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
-from problems import kepler_ks
-from suite.solve import solve
+from gnibench.problems import kepler_ks
+from gnibench.suite.cell.solve import solve
 
 
 def test_forward_back_maps_round_trip():

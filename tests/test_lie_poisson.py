@@ -11,12 +11,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import sympy as sp
-
-from methods.lie_poisson import COMMUTING_GROUPS, ROTATIONS, schedule, split_field
-from problems import REGISTRY
-from problems.codegen import python_functions, symbolic
-from suite.errors import UserError
-from suite.solve import prepare, solve
+from gnibench.methods.lie_poisson import COMMUTING_GROUPS, ROTATIONS, schedule, split_field
+from gnibench.problems import REGISTRY
+from gnibench.problems.codegen import python_functions, symbolic
+from gnibench.suite.cell.solve import prepare, solve
+from gnibench.suite.foundation.errors import UserError
 
 PID = "euler-so4"
 T = 1.0

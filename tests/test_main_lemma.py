@@ -21,11 +21,10 @@ import itertools
 
 import numpy as np
 import pytest
+from gnibench.problems import REGISTRY
+from gnibench.problems.codegen import problem_meta
+from gnibench.suite.cell.solve import solve
 from support import FULL, cap, gradients, integrals_at_start, rate_scale
-
-from problems import REGISTRY
-from problems.codegen import problem_meta
-from suite.solve import solve
 
 THETA = 2.0
 T_END = 6.0                      # ε decays by e^{-12}

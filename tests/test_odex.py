@@ -8,9 +8,8 @@ import math
 
 import numpy as np
 import pytest
+from gnibench.suite.cell.solve import solve
 from test_orders import observed_order
-
-from suite.solve import solve
 
 PERIOD = 2.0 * math.pi
 

@@ -20,11 +20,10 @@ import itertools
 
 import numpy as np
 import pytest
-
-import methods
-from problems import REGISTRY
-from suite.errors import UserError
-from suite.solve import prepare, solve
+from gnibench import methods
+from gnibench.problems import REGISTRY
+from gnibench.suite.cell.solve import prepare, solve
+from gnibench.suite.foundation.errors import UserError
 
 # (problem spec, T, n0): nonlinear problems with exact solutions
 ORDER_CASES = {

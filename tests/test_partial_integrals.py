@@ -14,12 +14,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
-from problems import REGISTRY
-from problems.codegen import problem_meta, python_functions, symbolic
-from suite.errors import UserError
-from suite.solve import solve
-from suite.spec import parse_method, parse_problem
+from gnibench.problems import REGISTRY
+from gnibench.problems.codegen import problem_meta, python_functions, symbolic
+from gnibench.suite.cell.solve import solve
+from gnibench.suite.cell.spec import parse_method, parse_problem
+from gnibench.suite.foundation.errors import UserError
 
 PID = "heavy-top-hess"
 THETA = 2.0

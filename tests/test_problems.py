@@ -18,12 +18,11 @@ import math
 
 import numpy as np
 import pytest
+from gnibench.problems import REGISTRY
+from gnibench.suite.cell.codegen import load
+from gnibench.suite.cell.spec import parse_method, parse_problem
 from scipy.integrate import solve_ivp
 from support import FULL
-
-from problems import REGISTRY
-from suite.codegen import load
-from suite.spec import parse_method, parse_problem
 
 FD = 1e-6
 PIDS = list(REGISTRY)

@@ -10,11 +10,10 @@ import math
 
 import numpy as np
 import pytest
+from gnibench.suite.cell import codegen, spec
+from gnibench.suite.cell.solve import solve
+from gnibench.suite.foundation.errors import UserError
 from scipy.integrate import solve_ivp
-
-from suite import codegen, spec
-from suite.errors import UserError
-from suite.solve import solve
 
 NEW = ("kepler-radial", "kepler-3d", "outer-solar-system", "henon-heiles", "gavrilov-shilnikov",
        "gavrilov-shilnikov-modified", "euler-so4", "geodesic-genus2")
@@ -73,7 +72,7 @@ def test_kepler_radial_initial():
 
 
 def test_kepler_3d_elements_and_period():
-    from problems.kepler3d_exact import elements_from_state
+    from gnibench.problems.kepler3d_exact import elements_from_state
 
     problem, _mod, _par, _ = compiled("kepler-3d")
     y0 = np.array(problem.record.y0(problem.values))
@@ -90,7 +89,7 @@ def test_kepler_3d_elements_and_period():
 
 
 def test_kepler_3d_elements_roundtrip():
-    from problems.kepler3d_exact import elements_from_state, state_from_elements
+    from gnibench.problems.kepler3d_exact import elements_from_state, state_from_elements
 
     rng = np.random.default_rng(1)
     for _ in range(20):
@@ -122,7 +121,7 @@ def test_kepler_3d_identities_along_orbit():
 
 
 def test_outer_solar_system_initial():
-    from problems import outer_solar_system as oss
+    from gnibench.problems import outer_solar_system as oss
 
     problem, mod, par, names = compiled("outer-solar-system")
     y0 = np.array(problem.record.y0(problem.values))
@@ -167,7 +166,7 @@ def test_gavrilov_shilnikov_modified_initial():
 
 
 def test_euler_so4_initial():
-    from problems.euler_so4 import chart
+    from gnibench.problems.euler_so4 import chart
 
     problem, mod, par, names = compiled("euler-so4")
     y0 = np.array(problem.record.y0(problem.values))
@@ -181,7 +180,7 @@ def test_euler_so4_initial():
 
 
 def test_geodesic_initial():
-    from problems.geodesic_genus2 import inside
+    from gnibench.problems.geodesic_genus2 import inside
 
     problem, mod, par, _ = compiled("geodesic-genus2")
     y0 = problem.record.y0(problem.values)
@@ -208,8 +207,7 @@ def test_bad_initial_points_are_user_errors(text, fragment):
 def test_sections_contain_the_initial_points():
     """Where a problem's default start lies on its section, g(y0) = 0 and the direction holds."""
     import sympy as sp
-
-    from problems.codegen import symbolic
+    from gnibench.problems.codegen import symbolic
 
     for pid in ("henon-heiles", "gavrilov-shilnikov", "gavrilov-shilnikov-modified", "euler-so4"):
         problem, _, par, _ = compiled(pid)
@@ -292,7 +290,7 @@ def test_euler_so4_field_is_even():
 
 
 def test_geodesic_constants():
-    from problems import geodesic_genus2 as g
+    from gnibench.problems import geodesic_genus2 as g
 
     assert g.R0 == pytest.approx(0.21684534, abs=5e-9)
     # the side arc crosses the axis at the octagon's inradius: cosh d = cot(pi/8) (angles pi/4)
@@ -313,7 +311,7 @@ def _hamiltonian(y):
 
 
 def test_post_step_maps_each_side_inside_and_keeps_H():
-    from problems.geodesic_genus2 import SIDE_CENTRE, inside, post_step
+    from gnibench.problems.geodesic_genus2 import SIDE_CENTRE, inside, post_step
 
     mid = SIDE_CENTRE - math.sqrt(SIDE_CENTRE**2 - 1)              # side midpoint on the axis
     rng = np.random.default_rng(5)
@@ -337,7 +335,7 @@ def test_post_step_maps_each_side_inside_and_keeps_H():
 
 
 def test_post_step_is_identity_inside():
-    from problems.geodesic_genus2 import inside, post_step
+    from gnibench.problems.geodesic_genus2 import inside, post_step
 
     rng = np.random.default_rng(6)
     for q in rng.uniform(-0.7, 0.7, (200, 2)):
@@ -349,8 +347,7 @@ def test_post_step_is_identity_inside():
 def test_post_step_opposite_sides_and_numba():
     """gamma maps the side at angle 0 onto the opposite side; the template compiles with numba."""
     import numba
-
-    from problems.geodesic_genus2 import SIDE_CENTRE, post_step
+    from gnibench.problems.geodesic_genus2 import SIDE_CENTRE, post_step
 
     mid = SIDE_CENTRE - math.sqrt(SIDE_CENTRE**2 - 1)
     z = post_step((mid + 1e-12, 0.0, 1.0, 0.0), np.zeros(0))
@@ -365,7 +362,7 @@ def test_post_step_opposite_sides_and_numba():
 
 def test_geodesic_solve_stays_in_the_octagon():
     """Through the solver, post_step keeps q in Omega; H is kept across the identifications."""
-    from problems.geodesic_genus2 import inside
+    from gnibench.problems.geodesic_genus2 import inside
 
     res = solve("geodesic-genus2", "rk4:h=0.01", steps=3000, every=1)
     assert res.status == "ok"

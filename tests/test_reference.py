@@ -11,14 +11,13 @@ import math
 import mpmath as mp
 import numpy as np
 import pytest
-
-from problems.base import Model, Problem
-from suite.cli import main
-from suite.errors import UserError
-from suite.params import bind
-from suite.reference import cache_path, parse_reference, reference, reference_solution
-from suite.solve import SampleGrid, grid, solve
-from suite.spec import Bound, parse_problem
+from gnibench.problems.base import Model, Problem
+from gnibench.suite.cell.reference import cache_path, parse_reference, reference, reference_solution
+from gnibench.suite.cell.solve import SampleGrid, grid, solve
+from gnibench.suite.cell.spec import parse_problem
+from gnibench.suite.cli.main import main
+from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.params import Bound, bind
 
 PERIOD = 2 * math.pi                         # kepler-2d, H0 = -1/2: a = 1, period 2 pi
 EPS = float(np.finfo(float).eps)
@@ -117,7 +116,7 @@ def test_second_request_reads_the_cached_file(long_run, monkeypatch):
     def no_integration(*args, **kwargs):
         raise AssertionError("a cached reference must not be integrated again")
 
-    monkeypatch.setattr("suite.engines.heyoka_propagate", no_integration)
+    monkeypatch.setattr("gnibench.methods.engines.heyoka.heyoka_propagate", no_integration)
     again = reference_solution(problem, t, "heyoka", "real128")
     assert again.cached and again.seconds < 1.0
     assert np.array_equal(again.y, sol.y)
@@ -151,7 +150,7 @@ def test_inexact_constants_are_given_to_heyoka_in_the_working_precision(tmp_path
     at t = 10). It is lifted into a runtime parameter set in real128, so the real128 solution
     matches the exact cos(t/sqrt 3) to ~1e-32."""
     monkeypatch.setenv("GNIBENCH_CACHE_DIR", str(tmp_path))
-    from suite.engines import heyoka_propagate, heyoka_system
+    from gnibench.methods.engines.heyoka import heyoka_propagate, heyoka_system
 
     problem = _third_oscillator()
     assert heyoka_system(problem.record).constants == ("-0.3333333333333333333333333333333333333333",)
@@ -271,7 +270,7 @@ def test_external_methods_through_solve(method, bound):
 
 
 def test_external_methods_are_listed_with_their_properties():
-    from suite.listing import listing
+    from gnibench.suite.cli.listing import listing
 
     rows = {r["id"]: r for r in listing("methods")}
     assert rows["heyoka-taylor"]["order"] == 20 and rows["heyoka-taylor"]["properties"]["adaptive"]

@@ -3,7 +3,7 @@ a method is symmetric if Φ_h^* = Φ_h, i.e. Φ_{-h} = Φ_h^{-1}).
 
 Test: integrate N = 1000 steps of h from y0, then N steps of -h from the final point, and require
 the return to y0 to round-off. Negative steps are not allowed by the method specs (h > 0 is
-validated), so the compiled cell is driven directly: ``suite.solve._compiled_cell`` loads the
+validated), so the compiled cell is driven directly: ``gnibench.suite.cell.solve._compiled_cell`` loads the
 module and builds ``par`` exactly as ``solve`` does, and its ``integrate(y0, par, h, ...)`` takes
 any h. (Reversing the momenta, p -> -p, would test ρ-reversibility instead, which needs a
 ρ-reversible problem *and* a symmetric method; stepping with -h tests the symmetry of the method
@@ -34,12 +34,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from gnibench import methods
+from gnibench.problems import REGISTRY
+from gnibench.suite.cell.solve import _compiled_cell, prepare
+from gnibench.suite.foundation.errors import UserError
 from support import cap, rate_scale
-
-import methods
-from problems import REGISTRY
-from suite.errors import UserError
-from suite.solve import _compiled_cell, prepare
 
 COMPILED = getattr(methods, "COMPILED", methods.METHODS)   # external engines have their own tests
 

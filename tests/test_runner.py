@@ -3,14 +3,13 @@ from __future__ import annotations
 
 import math
 
+import gnibench.suite.cell.solve
 import pandas as pd
 import pytest
-
-import suite.solve
-from reports.markdown import summary_from_dir
-from suite.cli import main
-from suite.experiment import load_experiment, parse_experiment, shipped, with_options
-from suite.storage import read_parquet_meta
+from gnibench.reports.markdown import summary_from_dir
+from gnibench.suite.cli.main import main
+from gnibench.suite.runs.experiment import load_experiment, parse_experiment, shipped, with_options
+from gnibench.suite.runs.storage import read_parquet_meta
 
 OUTPUTS = ("samples.parquet", "cells.parquet", "timings.parquet", "summary.md")
 
@@ -40,14 +39,14 @@ def tiny(tmp_path):
 @pytest.fixture
 def failing_cell(monkeypatch):
     """Make the cell with h = 0.025 raise, as an unexpected bug would."""
-    real = suite.solve.solve
+    real = gnibench.suite.cell.solve.solve
 
     def solve(problem, method, **kw):
         if "h=0.025" in method:
             raise RuntimeError("boom")
         return real(problem, method, **kw)
 
-    monkeypatch.setattr(suite.solve, "solve", solve)
+    monkeypatch.setattr(gnibench.suite.cell.solve, "solve", solve)
 
 
 @pytest.mark.parametrize("name", sorted(shipped()))
@@ -117,14 +116,14 @@ def test_two_runs_are_bit_identical(tiny, tmp_path):
 
 
 def test_interrupt_keeps_finished_cells(tiny, tmp_path, monkeypatch):
-    real = suite.solve.solve
+    real = gnibench.suite.cell.solve.solve
 
     def solve(problem, method, **kw):
         if "h=1e+200" in method or "h=1e200" in method:
             raise KeyboardInterrupt
         return real(problem, method, **kw)
 
-    monkeypatch.setattr(suite.solve, "solve", solve)
+    monkeypatch.setattr(gnibench.suite.cell.solve, "solve", solve)
     out = tmp_path / "out"
     assert main(["run", str(tiny), "-o", str(out)]) == 130
     cells = pd.read_parquet(out / "cells.parquet")

@@ -16,14 +16,13 @@ import math
 import numpy as np
 import pandas as pd
 import pytest
-
-import problems
-from problems import REGISTRY
-from problems.base import Section
-from suite.cli import main
-from suite.errors import UserError
-from suite.sections import crossing_intervals, solve_section
-from suite.solve import solve
+from gnibench import problems
+from gnibench.problems import REGISTRY
+from gnibench.problems.base import Section
+from gnibench.suite.cell.sections import crossing_intervals, solve_section
+from gnibench.suite.cell.solve import solve
+from gnibench.suite.cli.main import main
+from gnibench.suite.foundation.errors import UserError
 
 OSC_ID = "harmonic-oscillator-sec-test"
 P = f"{OSC_ID}:q0=0,p0=1"

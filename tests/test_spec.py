@@ -14,11 +14,10 @@ import math
 
 import numpy as np
 import pytest
-
-from methods import METHODS, MODIFIERS
-from problems import REGISTRY
-from suite.params import format_float
-from suite.spec import parse_method, parse_problem, split_method
+from gnibench.methods import METHODS, MODIFIERS
+from gnibench.problems import REGISTRY
+from gnibench.suite.cell.spec import parse_method, parse_problem, split_method
+from gnibench.suite.foundation.params import format_float
 
 MOD_PROBLEM = "double-oscillator"          # two independent integrals H1, H2 ([B] (4.2))
 ODD = (0.1 + 0.2) - 0.3                    # 5.551115123125783e-17: a float with a long repr

@@ -25,12 +25,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from gnibench import methods
+from gnibench.problems import REGISTRY
+from gnibench.suite.cell.solve import prepare, solve
+from gnibench.suite.foundation.errors import UserError
 from support import FULL, rate_scale
-
-import methods
-from problems import REGISTRY
-from suite.errors import UserError
-from suite.solve import prepare, solve
 
 DELTA = 1e-5
 TOL = 1e-8
@@ -60,8 +59,7 @@ def _structure_ok(mid, pid) -> bool:
 def _linear(pid) -> bool:
     """True when the field is linear (a weaker test of symplecticity)."""
     import sympy as sp
-
-    from problems.codegen import symbolic
+    from gnibench.problems.codegen import symbolic
 
     ys, _, rhs, _ = symbolic(REGISTRY[pid])
     try:

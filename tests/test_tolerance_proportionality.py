@@ -18,8 +18,7 @@ import math
 
 import numpy as np
 import pytest
-
-from suite.solve import solve
+from gnibench.suite.cell.solve import solve
 
 TOLS = [1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11]
 CASES = {  # method spec prefix: (expected error slope, expected cost slope)

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import math
 
-from methods.kernels.free import (
+from gnibench.methods.kernels.free import (
     BETA,
     DENSE_NFEV,
     DENSE_OUTPUT,

@@ -7,7 +7,7 @@ Newton) or non-finite state (status 1), keeping every sample taken so far plus t
 """
 from __future__ import annotations
 
-from methods.kernels.free import N, invariants, make_ws, post_step, project, step, store, to_tuple
+from gnibench.methods.kernels.free import N, invariants, make_ws, post_step, project, step, store, to_tuple
 
 
 def record_row(out_t, out_y, out_c, row, t, y, steps, nfev, njev, rejected):

@@ -18,8 +18,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-
-from methods.kernels.free import (
+from gnibench.methods.kernels.free import (
     N,
     f,
     post_step,

@@ -15,8 +15,7 @@ Free names bound in the generated module: D (degrees of freedom) and the generat
 from __future__ import annotations
 
 import numpy as np
-
-from methods.kernels.free import NEWTON_MAXIT, N, _unbound, lu_solve, newton_done
+from gnibench.methods.kernels.free import NEWTON_MAXIT, N, _unbound, lu_solve, newton_done
 
 D = 0
 gf_split = gf_join = gf_vec = gf_predict = gf_momentum = gf_position = _unbound

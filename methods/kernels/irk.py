@@ -7,8 +7,7 @@ at the current iterate (full Newton), so it converges quadratically to round-off
 from __future__ import annotations
 
 import numpy as np
-
-from methods.kernels.free import (
+from gnibench.methods.kernels.free import (
     NEWTON_MAXIT,
     A,
     D,

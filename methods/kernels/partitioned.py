@@ -7,8 +7,7 @@ straight tuple update). Evaluating only one block of f counts as half an f-evalu
 from __future__ import annotations
 
 import numpy as np
-
-from methods.kernels.free import (
+from gnibench.methods.kernels.free import (
     E_IDX,
     I_IDX,
     NE,

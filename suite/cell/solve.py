@@ -8,11 +8,14 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
+from gnibench import __version__
+from gnibench.suite.cell.codegen import load
+from gnibench.suite.foundation.status import KERNEL_STATUSES
 
-from suite import __version__
-from suite.codegen import STATUS, load
-from suite.errors import UserError
-from suite.spec import Bound, MethodConfig, parse_method, parse_problem
+STATUS = {s.code: s.value for s in KERNEL_STATUSES}
+from gnibench.suite.cell.spec import MethodConfig, parse_method, parse_problem
+from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.params import Bound
 
 ADAPTIVE_STATE = 10     # length of ``st``, the resumable state of the adaptive drivers
 
@@ -95,7 +98,7 @@ def global_error(problem: Bound, t: np.ndarray, y: np.ndarray, ref) -> tuple[np.
     """Euclidean norm of y - reference at every sample, and the reference's provenance."""
     if ref is None or len(t) == 0:
         return None, {"backend": None}
-    from suite.reference import reference_solution
+    from gnibench.suite.cell.reference import reference_solution
 
     sol = reference_solution(problem, t, ref)
     meta = {**ref.describe(), "cached": sol.cached, "seconds": sol.seconds}
@@ -121,11 +124,11 @@ def solve(problem_text: str, method_text: str, steps: int | None = None,
           t_end: float | None = None, every: int = 1, reference: str | None = None) -> Result:
     """Integrate one cell. Bad input raises UserError; divergence is a status, not an exception.
 
-    ``reference`` chooses what ``global_error`` is measured against (:mod:`suite.reference`):
+    ``reference`` chooses what ``global_error`` is measured against (:mod:`gnibench.suite.cell.reference`):
     ``exact``, ``heyoka[:precision=...,tol=...]``, ``rebound[:tol=...]`` or ``none``; by default
     the exact solution when the problem has one.
     """
-    from suite.reference import default_reference, parse_reference
+    from gnibench.suite.cell.reference import default_reference, parse_reference
 
     problem, method = prepare(problem_text, method_text)
     ref = (default_reference(problem.record) if reference is None
@@ -329,7 +332,7 @@ def _solve_transformed(problem, transformed, method, steps, t_end, every, ref) -
 
 def _solve_external(problem: Bound, method: MethodConfig, sg: SampleGrid, ref) -> Result:
     """An external engine's cell: ``Method.run`` on the sample grid instead of the compiled driver."""
-    from suite.engines import problem_functions
+    from gnibench.methods.engines.base import problem_functions
 
     rec = problem.record
     y0 = rec.y0(problem.values)

@@ -1,7 +1,7 @@
 """``gnibench run``: expand an experiment into cells, solve each, write tables and a summary.
 
-The runner only composes: :func:`suite.solve.solve` integrates a cell, :mod:`suite.tables` turns
-results into rows, :mod:`reports.markdown` renders the summary from the tables.
+The runner only composes: :func:`gnibench.suite.cell.solve.solve` integrates a cell, :mod:`gnibench.suite.runs.tables` turns
+results into rows, :mod:`gnibench.reports.markdown` renders the summary from the tables.
 
 Outputs in ``out_dir`` (default ``results/<experiment name>``), each written atomically:
 ``samples.parquet``, ``cells.parquet``, ``timings.parquet`` and ``summary.md`` (columns: see
@@ -18,7 +18,7 @@ most the cells finished since the last write.
 
 A cell that raises (anything but a KeyboardInterrupt) gets status ``error`` with the exception
 type and message as reason, and the run goes on. Bad input never reaches this point: the whole
-experiment is validated first (:func:`suite.experiment.load_experiment`) and nothing is written
+experiment is validated first (:func:`gnibench.suite.runs.experiment.load_experiment`) and nothing is written
 when that fails.
 
 Execution is serial by default. ``executor(run_cell, cells)`` is the seam for parallel backends
@@ -34,9 +34,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-
-from suite.errors import UserError
-from suite.experiment import Cell, Experiment, load_experiment
+from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.runs.experiment import Cell, Experiment, load_experiment
 
 FLUSH_RATIO = 10.0
 
@@ -55,8 +54,8 @@ class CellOutcome:
 
 def run_cell(cell: Cell) -> CellOutcome:
     """Solve one cell and build its rows; an unexpected exception becomes status ``error``."""
-    from suite.solve import solve
-    from suite.tables import cell_row, cell_samples, timing_row
+    from gnibench.suite.cell.solve import solve
+    from gnibench.suite.runs.tables import cell_row, cell_samples, timing_row
 
     try:
         with np.errstate(all="ignore"):     # overflow in a diverging cell is a status, not noise
@@ -77,7 +76,7 @@ def serial(fn: Callable[[Cell], CellOutcome], cells: Iterable[Cell]) -> Iterator
         yield fn(cell)
 
 
-def run_experiment(name_or_path, out_dir=None, executor=None, log=None) -> Path:
+def run_experiment(name_or_path, out_dir=None, executor=None, log=None, summarize=None) -> Path:
     """Run an experiment (shipped name or TOML path); return the output directory.
 
     Parameters
@@ -90,6 +89,10 @@ def run_experiment(name_or_path, out_dir=None, executor=None, log=None) -> Path:
         ``executor(run_cell, cells)`` yielding :class:`CellOutcome` (default :func:`serial`).
     log:
         Stream for the progress lines (default stderr).
+    summarize:
+        ``summarize(meta, cells, timings) -> str``, the Markdown written to ``summary.md`` with
+        every flush (the command line passes :func:`gnibench.reports.markdown.render_summary`;
+        the runner sits below the reports and does not import them). None: no summary.
     """
     experiment = load_experiment(name_or_path)
     out = Path(out_dir) if out_dir is not None else Path("results") / experiment.name
@@ -100,7 +103,7 @@ def run_experiment(name_or_path, out_dir=None, executor=None, log=None) -> Path:
     except OSError as e:
         raise UserError(f"bad -o {out}: cannot create the directory ({e.strerror})") from None
     log = sys.stderr if log is None else log
-    writer = _Writer(experiment, out)
+    writer = _Writer(experiment, out, summarize)
     n = len(experiment.cells)
     print(f"gnibench: {experiment.name}: {n} cells -> {out}", file=log)
     try:
@@ -127,8 +130,8 @@ def _progress(k: int, n: int, o: CellOutcome) -> str:
 class _Writer:
     """Holds the finished cells and rewrites the four outputs atomically."""
 
-    def __init__(self, experiment: Experiment, out: Path):
-        self.experiment, self.out = experiment, out
+    def __init__(self, experiment: Experiment, out: Path, summarize=None):
+        self.experiment, self.out, self.summarize = experiment, out, summarize
         self.done: dict[int, CellOutcome] = {}
         self.last_write, self.write_cost = time.perf_counter(), 0.0
 
@@ -139,9 +142,8 @@ class _Writer:
         return time.perf_counter() - self.last_write >= FLUSH_RATIO * self.write_cost
 
     def flush(self) -> None:
-        from reports.markdown import render_summary
-        from suite.storage import atomic_write, write_parquet
-        from suite.tables import cell_row, cells_table, samples_table, timing_row, timings_table
+        from gnibench.suite.runs.storage import atomic_write, write_parquet
+        from gnibench.suite.runs.tables import cell_row, cells_table, samples_table, timing_row, timings_table
 
         t0 = time.perf_counter()
         cells = self.experiment.cells
@@ -155,13 +157,14 @@ class _Writer:
         write_parquet(cells_df, self.out / "cells.parquet", {**meta, "table": "cells"})
         write_parquet(timings_df, self.out / "timings.parquet",
                       {**meta, "table": "timings", "written_at": time.strftime("%Y-%m-%dT%H:%M:%S%z")})
-        text = render_summary(meta, cells_df, timings_df)
-        atomic_write(self.out / "summary.md", lambda p: Path(p).write_text(text, encoding="utf-8"))
+        if self.summarize is not None:
+            text = self.summarize(meta, cells_df, timings_df)
+            atomic_write(self.out / "summary.md", lambda p: Path(p).write_text(text, encoding="utf-8"))
         self.last_write = time.perf_counter()
         self.write_cost = self.last_write - t0
 
     def provenance(self, ndone: int) -> dict:
-        from suite.solve import versions
+        from gnibench.suite.cell.solve import versions
 
         e = self.experiment
         return {"experiment": e.name, "title": e.title, "reference": e.reference,

@@ -17,7 +17,7 @@ Design
 
    * ``dense`` -- where the method has a continuous extension and the accepted points are its
      endpoints (dopri5, dop853 in adaptive mode, without a step modifier such as +projection and on
-     a problem without an identification map ``post_step``; :func:`suite.solve.dense_output_refusal`).
+     a problem without an identification map ``post_step``; :func:`gnibench.suite.cell.solve.dense_output_refusal`).
      The step (t_n, t_n+1] is recomputed from y_n with the driver's step size by the cell's
      ``dense_coeffs``, i.e. by the very operations of ``step_err``: its end point must equal the
      sample y_n+1 bit for bit (else the crossing falls back to Hénon's trick and is counted in
@@ -47,13 +47,11 @@ Gamma_k), the section coordinates, the remaining state components, and ``err_<in
 """
 from __future__ import annotations
 
-import sys
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
-
-from suite.errors import UserError
+from gnibench.suite.foundation.errors import UserError
 
 CHUNK = 8192                  # steps per chunk of the compiled drivers
 HENON_RTOL = 1e-15            # agreement of m and 2m DOP853 substeps
@@ -84,7 +82,7 @@ def section_of(rec, index: int = 0):
     if not rec.sections:
         raise UserError(f"{rec.id} has no Poincaré section; --section applies to problems with one "
                         f"(see `gnibench list problems`)")
-    from problems.codegen import python_functions
+    from gnibench.problems.codegen import python_functions
 
     fns = python_functions(rec)
     return (rec.sections[index], fns[f"section_g_{index}"], fns[f"section_grad_{index}"],
@@ -112,7 +110,7 @@ def crossing_intervals(gv: np.ndarray) -> np.ndarray:
 # -- Hénon's trick ----------------------------------------------------------------------------------
 
 def _dop853():
-    from methods.dop853_coefficients import N_STAGES, A, B, C
+    from gnibench.methods.dop853_coefficients import N_STAGES, A, B, C
 
     return A[:N_STAGES, :N_STAGES], np.asarray(B, dtype=float), C[:N_STAGES]
 
@@ -232,7 +230,7 @@ def _fixed_chunks(cell, rec, h, nsteps, h_last):
 def _adaptive_chunks(cell, rec, v, t_end):
     """Yield (t, y, h, status, done) chunks of the resumable adaptive driver; h[i] is the size of
     the accepted step ending at sample i (the driver's 5th output column; 0 where unknown)."""
-    from suite.solve import ADAPTIVE_STATE
+    from gnibench.suite.cell.solve import ADAPTIVE_STATE
 
     y_io = np.array([cell.y0, np.zeros(rec.dim)], dtype=np.float64)
     st = np.zeros(ADAPTIVE_STATE)
@@ -258,8 +256,15 @@ def solve_section(problem_text: str, method_text: str, crossings: int, steps: in
     ``locator``: None (dense output where it applies, else Hénon's trick), ``"henon"`` (always
     Hénon's trick, e.g. to compare the two) or ``"dense"`` (a UserError where it does not apply).
     """
-    from suite.codegen import STATUS
-    from suite.solve import _compiled_cell, dense_output_refusal, grid, grid_step, prepare, solve
+    from gnibench.suite.cell.solve import (
+        STATUS,
+        _compiled_cell,
+        dense_output_refusal,
+        grid,
+        grid_step,
+        prepare,
+        solve,
+    )
 
     if crossings < 1:
         raise UserError(f"bad --section {crossings}; allowed: an integer >= 1 (number of crossings)")
@@ -375,7 +380,7 @@ def solve_section(problem_text: str, method_text: str, crossings: int, steps: in
             if len(Yc) else np.zeros((0, len(integral_names))))
     for k, name in enumerate(integral_names):
         cols[f"err_{name}"] = errs[:, k]
-    from suite.solve import versions
+    from gnibench.suite.cell.solve import versions
 
     meta = {"versions": versions(), "section": sec.name, "section_reference": sec.reference,
             "crossings_requested": crossings, "crossings_found": len(pts_t),
@@ -397,15 +402,6 @@ def solve_section(problem_text: str, method_text: str, crossings: int, steps: in
 
 
 def _integral_names(rec) -> tuple[str, ...]:
-    from problems.codegen import problem_meta
+    from gnibench.problems.codegen import problem_meta
 
     return tuple(problem_meta(rec)["integrals"])
-
-
-def write_sections(result: SectionResult, fmt: str, out, stdout=sys.stdout) -> None:
-    """Write the section points in csv, json or parquet (provenance as in suite.storage)."""
-    from suite.storage import write_frame
-
-    meta = {"problem": result.problem, "method": result.method, "status": result.status,
-            "reason": result.reason, **result.meta}
-    write_frame(result.frame(), meta, fmt, out, stdout)

@@ -5,9 +5,9 @@ Three backends:
 * ``exact``: the problem's exact solution (``Problem.exact``), evaluated in double. It is cheap and
   not cached. Its accuracy is limited by double round-off in the phase, and that limit grows with t:
   kepler-2d at t = 1000 periods is good to about 2e-11 (measured against a real128 reference).
-* ``heyoka``: Taylor integration of the problem's sympy model (:func:`suite.engines.heyoka_propagate`)
+* ``heyoka``: Taylor integration of the problem's sympy model (:func:`gnibench.methods.engines.heyoka.heyoka_propagate`)
   in double, long double or real128, with ``tol`` = the epsilon of the precision by default.
-* ``rebound``: IAS15 on N-body problems with a rebound adapter (:data:`suite.nbody.ADAPTERS`), in
+* ``rebound``: IAS15 on N-body problems with a rebound adapter (:data:`gnibench.methods.engines.rebound.ADAPTERS`), in
   double, with ``tol`` = IAS15's epsilon (rebound's default 1e-9).
 
 The integrated references are cached on disk under ``<cache>/references``. A file's key is the
@@ -24,12 +24,11 @@ from dataclasses import dataclass, field
 from importlib.metadata import version
 
 import numpy as np
-
-from suite.cache import cache_dir
-from suite.engines import epsilon, precision_name
-from suite.errors import UserError
-from suite.params import Param, bind
-from suite.spec import parse_item
+from gnibench.methods.engines.heyoka import epsilon, precision_name
+from gnibench.suite.cell.spec import parse_item
+from gnibench.suite.foundation.cache import cache_dir
+from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.params import Param, bind
 
 BACKENDS = ("exact", "heyoka", "rebound")
 FORMAT = 1                                     # bump when the cached content changes meaning
@@ -93,11 +92,11 @@ def resolve(backend: str, precision: str = "double", tol: float | None = None,
             raise UserError(f"problem {problem.id} has no exact solution; use a heyoka reference "
                             f"(--reference heyoka)")
         if backend == "rebound":
-            from suite.nbody import adapter
+            from gnibench.methods.engines.rebound import adapter
 
             adapter(problem)
         if backend == "heyoka":
-            from suite.engines import check_heyoka
+            from gnibench.methods.engines.heyoka import check_heyoka
 
             check_heyoka(problem)
     if backend == "exact":
@@ -125,7 +124,7 @@ def default_reference(problem) -> ReferenceSpec | None:
 
 
 def _key(problem_bound, t: np.ndarray, spec: ReferenceSpec) -> str:
-    from problems.codegen import _source_hash
+    from gnibench.problems.codegen import _source_hash
 
     engine = {"heyoka": "heyoka", "rebound": "rebound"}[spec.backend]
     doc = {"format": FORMAT, "problem": problem_bound.text(),
@@ -143,7 +142,7 @@ def cache_path(problem_bound, t: np.ndarray, spec: ReferenceSpec):
 
 
 def _full_from_text(text: np.ndarray, precision: str) -> np.ndarray:
-    from suite.engines import fp_type
+    from gnibench.methods.engines.heyoka import fp_type
 
     fp = fp_type(precision)
     flat = [fp(s) for s in text.ravel()]
@@ -159,7 +158,7 @@ def _read(path, spec: ReferenceSpec, t: np.ndarray) -> ReferenceSolution:
 
 
 def _write(path, sol: ReferenceSolution) -> None:
-    from suite.storage import atomic_write
+    from gnibench.suite.foundation.cache import atomic_write
 
     arrays = {"t": sol.t, "y": sol.y, "info": np.array(json.dumps(sol.info, default=str))}
     if sol.y_full is not None:
@@ -179,7 +178,7 @@ def reference_solution(problem_bound, t_grid, backend: str | ReferenceSpec = "ex
     Parameters
     ----------
     problem_bound:
-        A parsed problem (:func:`suite.spec.parse_problem`).
+        A parsed problem (:func:`gnibench.suite.cell.spec.parse_problem`).
     t_grid:
         Sample times, increasing from 0.
     backend, precision, tol:
@@ -200,8 +199,8 @@ def reference_solution(problem_bound, t_grid, backend: str | ReferenceSpec = "ex
         sol = _read(path, spec, t)
         sol.seconds = time.perf_counter() - t0
         return sol
-    from suite.engines import heyoka_propagate
-    from suite.nbody import rebound_propagate
+    from gnibench.methods.engines.heyoka import heyoka_propagate
+    from gnibench.methods.engines.rebound import rebound_propagate
 
     if spec.backend == "heyoka":
         run = heyoka_propagate(problem_bound, t, spec.precision, spec.tol)

@@ -40,8 +40,8 @@ C_REFERENCE_NS = {"rk4": 29.0, "sv": 14.0}  # the issue's C numbers on the refer
 
 def compiled_cell(method: str, problem: str = PROBLEM, h: float = H):
     """(integrate, y0, par) of a warmed-up cell without modifiers; compile time excluded."""
-    from suite.codegen import load
-    from suite.solve import prepare
+    from gnibench.suite.cell.codegen import load
+    from gnibench.suite.cell.solve import prepare
 
     bound, cfg = prepare(problem, f"{method}:h={h!r}")
     if cfg.modifiers:
@@ -81,7 +81,7 @@ def build_c(tmp: Path) -> Path | None:
     gcc = shutil.which("gcc")
     if gcc is None:
         return None
-    src = resources.files("suite") / "bench_c" / "kepler.c"
+    src = resources.files("gnibench.suite.runs") / "bench_c" / "kepler.c"
     exe = tmp / "kepler"
     with resources.as_file(src) as path:
         subprocess.run([gcc, "-O3", "-ffp-contract=off", "-o", str(exe), str(path), "-lm"],
@@ -98,7 +98,7 @@ def time_c(exe: Path, method: str, steps: int, y0, repeats: int = REPEATS):
 
 def _solve_cmd() -> list[str]:
     exe = Path(sys.executable).with_name("gnibench")
-    return [str(exe)] if exe.exists() else [sys.executable, "-m", "suite.cli"]
+    return [str(exe)] if exe.exists() else [sys.executable, "-m", "gnibench.suite.cli.main"]
 
 
 def startup(runs: int = 2) -> list[dict]:
@@ -120,7 +120,7 @@ def bench(steps: int = 2_000_000, with_c: bool = True, adaptive: bool = True,
     """Print the tables (and return their rows): fixed step numba vs C ns/step, ratio, agreement;
     adaptive dopri5/dop853 vs C and solve_ivp (``bench_adaptive``); startup."""
     if steps < 1:
-        from suite.errors import UserError
+        from gnibench.suite.foundation.errors import UserError
 
         raise UserError(f"bad --steps {steps}; allowed: an integer >= 1")
     print(f"{PROBLEM} e=0.6, h = 2pi/1000, {steps} steps, min/median of {REPEATS} repeats "
@@ -179,8 +179,8 @@ ADAPTIVE_CELLS = (("dopri5", "RK45"), ("dop853", "DOP853"))  # (gnibench method,
 
 def adaptive_cell(method: str, tol: float = ADAPTIVE_TOL, problem: str = PROBLEM):
     """(integrate_adaptive, y0, par, Pair) of a warmed-up adaptive cell; compile time excluded."""
-    from suite.codegen import load
-    from suite.solve import prepare
+    from gnibench.suite.cell.codegen import load
+    from gnibench.suite.cell.solve import prepare
 
     bound, cfg = prepare(problem, f"{method}:adaptive=true,rtol={tol!r},atol={tol!r}")
     mod, _, _ = load(bound, cfg)
@@ -274,7 +274,7 @@ def build_c_adaptive(tmp: Path, method: str, pair) -> Path | None:
         return None
     (tmp / method).mkdir(exist_ok=True)
     (tmp / method / "pair.h").write_text(pair_header(pair))
-    src = resources.files("suite") / "bench_c" / "kepler_adaptive.c"
+    src = resources.files("gnibench.suite.runs") / "bench_c" / "kepler_adaptive.c"
     exe = tmp / f"kepler_{method}"
     with resources.as_file(src) as path:
         # -march=native: numba compiles for the host CPU too (-ffp-contract=off still forbids FMA)

@@ -1,16 +1,16 @@
 """The external engines, heyoka and rebound, driven from a problem's single definition.
 
-Both serve twice: as reference solutions (:mod:`suite.reference`) and as competitor methods
-(:mod:`methods.external`).
+Both serve twice: as reference solutions (:mod:`gnibench.suite.cell.reference`) and as competitor methods
+(:mod:`gnibench.methods.external`).
 
 * **heyoka** (Taylor's method, Biscani & Izzo 2021). The system is built from the problem's sympy
-  model (:func:`problems.codegen.symbolic`) with ``heyoka.from_sympy``. Model parameters become
+  model (:func:`gnibench.problems.codegen.symbolic`) with ``heyoka.from_sympy``. Model parameters become
   runtime parameters ``heyoka.par[i]``, so one JIT-compiled integrator serves every parameter value.
   Constants that are not exactly representable as doubles (sqrt(2), 1/3, ...) would be rounded
   to double by ``from_sympy``. They become runtime parameters as well, set in the working
   precision, so a real128 integration really integrates the model in real128. Numbers that are
   already doubles (the problem's parameters, initial values and grid times) are converted exactly.
-* **rebound** (IAS15, WHFast): :mod:`suite.nbody`.
+* **rebound** (IAS15, WHFast): :mod:`gnibench.methods.engines.rebound`.
 
 Both return an :class:`EngineRun` on a given sample grid.
 """
@@ -21,8 +21,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-
-from suite.errors import UserError
+from gnibench.methods.engines.base import EngineRun
+from gnibench.suite.foundation.errors import UserError
 
 PRECISIONS = ("double", "long double", "real128")
 _PRECISION_ALIASES = {"double": "double", "float64": "double", "long double": "long double",
@@ -61,24 +61,6 @@ def epsilon(precision: str) -> float:
 
 
 COMPACT_ABOVE = 8                              # heyoka compact mode for systems larger than this
-
-
-@dataclass(frozen=True)
-class ProblemFunctions:
-    """A problem's generated functions run as plain Python (no compilation), for engine output."""
-
-    names: tuple[str, ...]
-    invariants: Callable
-
-
-def problem_functions(problem) -> ProblemFunctions:
-    """The first integrals of a problem record, from the same generated source as the kernels
-    (:func:`problems.codegen.python_functions`), so external engines are judged by the very
-    expressions the compiled methods use."""
-    from problems.codegen import problem_meta, python_functions
-
-    return ProblemFunctions(tuple(problem_meta(problem)["integrals"]),
-                            python_functions(problem)["invariants"])
 
 
 # ---------------------------------------------------------------------------------------------
@@ -141,7 +123,7 @@ def check_heyoka(problem) -> None:
 
 def heyoka_system(problem) -> HeyokaSystem:
     """The heyoka equations of a problem record, built once per process from its sympy model."""
-    from problems.codegen import _source_hash, symbolic
+    from gnibench.problems.codegen import _source_hash, symbolic
 
     key = f"{problem.id}-{_source_hash(problem)}"
     if key in _systems:
@@ -178,27 +160,6 @@ def heyoka_system(problem) -> HeyokaSystem:
                           [[hy.from_sympy(c, s_dict) for c in m] for m in maps])
     _systems[key] = system
     return system
-
-
-@dataclass
-class EngineRun:
-    """What an engine gives back on a sample grid.
-
-    ``y`` is float64; ``y_full`` the same samples in the working precision (None for double).
-    ``steps`` is cumulative per sample; ``nfev`` cumulative force evaluations, NaN where the
-    engine does not expose them. ``status`` is ``ok`` or ``nonfinite``; after a failure only the
-    samples reached are kept.
-    """
-
-    y: np.ndarray
-    y_full: np.ndarray | None
-    steps: np.ndarray
-    nfev: np.ndarray
-    status: str
-    reason: str
-    setup_seconds: float
-    seconds: float
-    info: dict
 
 
 def heyoka_propagate(problem_bound, t: np.ndarray, precision: str = "double",

@@ -9,7 +9,7 @@ import json
 import sys
 from pathlib import Path
 
-from suite.errors import UserError
+from gnibench.suite.foundation.errors import UserError
 
 
 class _Parser(argparse.ArgumentParser):
@@ -54,8 +54,8 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def _solve(a) -> int:
-    from suite.solve import solve
-    from suite.storage import write_result
+    from gnibench.suite.cell.solve import solve
+    from gnibench.suite.runs.storage import write_result
 
     if a.format == "parquet" and a.output is None:
         raise UserError("--format parquet needs -o FILE (binary output is not written to stdout)")
@@ -72,7 +72,8 @@ def _solve(a) -> int:
 
 
 def _solve_section(a) -> int:
-    from suite.sections import solve_section, write_sections
+    from gnibench.suite.cell.sections import solve_section
+    from gnibench.suite.runs.storage import write_sections
 
     if a.every != 1:
         raise UserError("--every does not apply with --section (the section points are written)")
@@ -86,27 +87,28 @@ def _solve_section(a) -> int:
 
 
 def _list(a) -> int:
-    from suite.listing import listing
+    from gnibench.suite.cli.listing import listing
 
     rows = listing(a.what)
     if a.format == "json":
         print(json.dumps(rows, indent=1, default=str))
     else:
-        from suite.listing import as_table
+        from gnibench.suite.cli.listing import as_table
 
         print(as_table(a.what, rows))
     return 0
 
 
 def _run(a) -> int:
-    from suite.runner import run_experiment
+    from gnibench.reports.markdown import render_summary
+    from gnibench.suite.runs.runner import run_experiment
 
-    run_experiment(a.experiment, a.output)
+    run_experiment(a.experiment, a.output, summarize=render_summary)
     return 0
 
 
 def _bench(a) -> int:
-    from suite.bench import bench
+    from gnibench.suite.runs.bench import bench
 
     bench(steps=a.steps, with_c=not a.no_c)
     return 0

@@ -9,7 +9,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from suite.errors import UserError
+from gnibench.suite.foundation.errors import UserError
 
 
 @dataclass(frozen=True)
@@ -121,3 +121,35 @@ def bind(params: tuple[Param, ...], given: dict[str, str], owner: str) -> dict[s
     for p in params:
         out.setdefault(p.name, p.default)
     return out
+
+
+@dataclass(frozen=True)
+class Bound:
+    """A registry record with validated option values."""
+
+    record: Any
+    values: dict[str, Any]
+
+    @property
+    def id(self) -> str:
+        return self.record.id
+
+    def text(self) -> str:
+        """Canonical ``id:key=value,...``: relevant, non-None values in schema order; options marked
+        ``show_default=False`` (solver tuning such as newton_maxit) only when not at their default."""
+        parts = []
+        for p in self.record.params:
+            v = self.values.get(p.name)
+            if v is None or not _relevant(p, self.values):
+                continue
+            if not p.show_default and v == p.default:
+                continue
+            parts.append(f"{p.name}={p.format(v)}")
+        return self.record.id + (":" + ",".join(parts) if parts else "")
+
+
+def _relevant(p: Param, values: dict[str, Any]) -> bool:
+    if p.only_if is None:
+        return True
+    key, want = p.only_if
+    return values.get(key) == want

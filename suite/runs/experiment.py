@@ -24,8 +24,8 @@ A ``vary`` value overrides the same option written in a spec. Values are numbers
 booleans, or lists of numbers (written ``a/b`` in the spec). The cells of a group are the product
 problems x vary.problem x methods x (method vary keys), in that order, numbered from 0 across
 the groups. Every cell is checked before any runs (unknown keys, specs through
-:func:`suite.solve.prepare`, horizons, sample counts, duplicates); a bad one raises
-:class:`~suite.errors.UserError` naming the place and what is allowed.
+:func:`gnibench.suite.cell.solve.prepare`, horizons, sample counts, duplicates); a bad one raises
+:class:`~gnibench.suite.foundation.errors.UserError` naming the place and what is allowed.
 """
 from __future__ import annotations
 
@@ -37,9 +37,9 @@ from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 
-from suite.errors import UserError, unknown
-from suite.params import format_float
-from suite.spec import parse_item, split_method
+from gnibench.suite.cell.spec import parse_item, split_method
+from gnibench.suite.foundation.errors import UserError, unknown
+from gnibench.suite.foundation.params import format_float
 
 TOP_KEYS = ("name", "title", "reference", "description", "t_end", "steps", "every", "cells")
 GROUP_KEYS = ("label", "problems", "methods", "t_end", "steps", "every", "vary")
@@ -51,7 +51,7 @@ _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]*$")
 class Cell:
     """One problem x method x horizon: the unit of work of the runner.
 
-    ``problem_spec``/``method_spec`` are the texts given to :func:`suite.solve.solve`;
+    ``problem_spec``/``method_spec`` are the texts given to :func:`gnibench.suite.cell.solve.solve`;
     ``problem``/``method`` are their canonical texts (what the tables show).
     """
 
@@ -85,7 +85,7 @@ class Experiment:
 
 def shipped() -> dict[str, str]:
     """Names of the shipped experiments and their TOML texts."""
-    root = resources.files("suite") / "experiments"
+    root = resources.files("gnibench.suite") / "experiments"
     return {f.name[:-5]: f.read_text(encoding="utf-8") for f in root.iterdir()
             if f.name.endswith(".toml")}
 
@@ -240,7 +240,7 @@ def with_options(spec: str, target: str, options: dict[str, str]) -> str:
 
 
 def _expand(group: dict, gi: int, defaults: dict, where: str, first_id: int) -> list[Cell]:
-    from suite.solve import grid, grid_step, prepare
+    from gnibench.suite.cell.solve import grid, grid_step, prepare
 
     _keys(group, GROUP_KEYS, where)
     label = _text(group, "label", where)

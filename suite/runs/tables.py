@@ -9,8 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
-
-from suite.storage import trajectory_frame
+from gnibench.suite.runs.storage import trajectory_frame
 
 SAMPLE_FRONT = ("cell", "problem", "method", "t", "steps", "nfev")
 STATUSES = ("ok", "nonfinite", "newton_failed", "error", "pending")

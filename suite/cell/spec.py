@@ -13,10 +13,9 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
-from typing import Any
 
-from suite.errors import UserError, unknown
-from suite.params import Param, bind
+from gnibench.suite.foundation.errors import UserError, unknown
+from gnibench.suite.foundation.params import Bound, bind
 
 _MODIFIER_SPLIT = re.compile(r"\+(?=[A-Za-z])")
 _ID = re.compile(r"^[A-Za-z][A-Za-z0-9_-]*$")
@@ -47,38 +46,6 @@ def split_method(text: str) -> list[str]:
 
 
 @dataclass(frozen=True)
-class Bound:
-    """A registry record with validated option values."""
-
-    record: Any
-    values: dict[str, Any]
-
-    @property
-    def id(self) -> str:
-        return self.record.id
-
-    def text(self) -> str:
-        """Canonical ``id:key=value,...``: relevant, non-None values in schema order; options marked
-        ``show_default=False`` (solver tuning such as newton_maxit) only when not at their default."""
-        parts = []
-        for p in self.record.params:
-            v = self.values.get(p.name)
-            if v is None or not _relevant(p, self.values):
-                continue
-            if not p.show_default and v == p.default:
-                continue
-            parts.append(f"{p.name}={p.format(v)}")
-        return self.record.id + (":" + ",".join(parts) if parts else "")
-
-
-def _relevant(p: Param, values: dict[str, Any]) -> bool:
-    if p.only_if is None:
-        return True
-    key, want = p.only_if
-    return values.get(key) == want
-
-
-@dataclass(frozen=True)
 class MethodConfig:
     """A base method and its modifiers, each bound to its option values."""
 
@@ -91,7 +58,7 @@ class MethodConfig:
 
 def parse_problem(text: str) -> Bound:
     """Resolve a PROBLEM spec against the problem registry."""
-    from problems import REGISTRY
+    from gnibench.problems import REGISTRY
 
     name, given = parse_item(text, "problem")
     if name not in REGISTRY:
@@ -104,7 +71,7 @@ def parse_problem(text: str) -> Bound:
 
 def parse_method(text: str, problem: Bound | None = None) -> MethodConfig:
     """Resolve a METHOD spec; with a problem, modifiers and structure needs are checked against it."""
-    from methods import ALIASES, METHODS, MODIFIERS
+    from gnibench.methods import ALIASES, METHODS, MODIFIERS
 
     parts = split_method(text)
     name, given = parse_item(parts[0], "method")

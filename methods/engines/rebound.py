@@ -1,8 +1,8 @@
 """rebound (IAS15, WHFast) for gravitational N-body problems: adapters and the integration loop.
 
 An :class:`NBodyAdapter` says how a problem's state maps to rebound particles and back; a problem
-without one is refused with a UserError. Used by :mod:`suite.reference` (IAS15 references) and
-:mod:`methods.external` (``rebound-ias15``, ``rebound-whfast``).
+without one is refused with a UserError. Used by :mod:`gnibench.suite.cell.reference` (IAS15 references) and
+:mod:`gnibench.methods.external` (``rebound-ias15``, ``rebound-whfast``).
 """
 from __future__ import annotations
 
@@ -12,9 +12,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-
-from suite.engines import EngineRun
-from suite.errors import UserError
+from gnibench.methods.engines.base import EngineRun
+from gnibench.suite.foundation.errors import UserError
 
 
 @dataclass(frozen=True)
@@ -80,8 +79,7 @@ class NBodyAdapter:
 def kepler_mu(problem_bound) -> float:
     """mu of a Kepler problem, read off its own vector field: p1' = -mu at q = e1, p = 0."""
     import sympy as sp
-
-    from problems.codegen import symbolic
+    from gnibench.problems.codegen import symbolic
 
     rec = problem_bound.record
     ys, ps, rhs, _ = symbolic(rec)
@@ -119,7 +117,7 @@ ADAPTERS: dict[str, NBodyAdapter] = {
 def adapter(problem) -> NBodyAdapter:
     """The rebound adapter of a problem record, or a UserError naming the problems that have one."""
     if problem.id not in ADAPTERS:
-        from problems import REGISTRY
+        from gnibench.problems import REGISTRY
 
         have = ", ".join(k for k in ADAPTERS if k in REGISTRY)
         raise UserError(f"rebound integrates only gravitational N-body problems; problem "

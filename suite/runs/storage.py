@@ -7,8 +7,9 @@ from __future__ import annotations
 
 import json
 import math
-import os
 from pathlib import Path
+
+from gnibench.suite.foundation.cache import atomic_write
 
 
 def trajectory_frame(result):
@@ -39,17 +40,6 @@ def _clean(x):
     if isinstance(x, float) and not math.isfinite(x):
         return None
     return x
-
-
-def atomic_write(path: Path, write) -> None:
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
-    try:
-        write(tmp)
-        tmp.replace(path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
 
 
 def write_parquet(df, path: Path, meta: dict) -> None:
@@ -92,3 +82,10 @@ def write_frame(df, meta: dict, fmt: str, out: Path | None, stdout) -> None:
             atomic_write(out, lambda p: Path(p).write_text(text + "\n"))
     else:
         write_parquet(df, out, meta)
+
+
+def write_sections(result, fmt: str, out, stdout=None) -> None:
+    """Write the section points in csv, json or parquet (provenance as in gnibench.suite.runs.storage)."""
+    meta = {"problem": result.problem, "method": result.method, "status": result.status,
+            "reason": result.reason, **result.meta}
+    write_frame(result.frame(), meta, fmt, out, stdout)

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 def listing(what: str) -> list[dict]:
     if what == "problems":
-        from problems import REGISTRY
+        from gnibench.problems import REGISTRY
 
         return [p.describe() for p in REGISTRY.values()]
-    from methods import METHODS, MODIFIERS
+    from gnibench.methods import METHODS, MODIFIERS
 
     return [m.describe() for m in METHODS.values()] + [m.describe() for m in MODIFIERS.values()]
 

@@ -1,0 +1,59 @@
+"""Code templates: how plain Python functions become the numba source of a cell's module.
+
+Methods, modifiers and problems describe their compiled parts as template functions (plain, lintable
+Python whose free names are bound in the generated module, see :mod:`gnibench.methods.kernels.free`)
+or as generated text. This module holds the few pieces every generator shares: the copy of a
+template's source (:func:`template`), the tuple/array helpers of a state of N components
+(:func:`tuple_helpers`) and the :class:`Context` a generator may read. The assembly of a cell's
+module lives above, in :mod:`gnibench.suite.cell.codegen`.
+"""
+from __future__ import annotations
+
+import inspect
+import re
+import textwrap
+from dataclasses import dataclass, field
+from typing import Any
+
+
+@dataclass
+class Context:
+    """What a method or modifier generator may know about the cell it generates code for."""
+
+    n: int
+    meta: dict
+    values: dict
+    modified: bool
+    explicit_u: bool
+    explicit_v: bool
+    extra: dict = field(default_factory=dict)
+    problem: Any = None        # the problem record, for methods built from its model (generating-function4)
+
+
+def template(func, rename: dict[str, str] | None = None) -> str:
+    """Source of a template function, decorated for numba, with identifiers renamed."""
+    src = textwrap.dedent(inspect.getsource(func))
+    for old, new in (rename or {}).items():
+        src = re.sub(rf"\b{re.escape(old)}\b", new, src)
+    return "\n@njit(cache=True)\n" + src
+
+
+def tuple_helpers(n: int) -> str:
+    """to_tuple, shifted, store: conversions between the tuple state and arrays."""
+    items = ", ".join(f"a[{i}]" for i in range(n))
+    shifted = ", ".join(f"y[{i}] + Z[j, {i}]" for i in range(n))
+    comma = "," if n == 1 else ""
+    return f'''
+@njit(cache=True)
+def to_tuple(a):
+    return ({items}{comma})
+
+@njit(cache=True)
+def shifted(y, Z, j):
+    return ({shifted}{comma})
+
+@njit(cache=True)
+def store(t, A, j):
+    for i in range(len(t)):
+        A[j, i] = t[i]
+'''

@@ -1,0 +1,162 @@
+"""The layout: one import package ``gnibench``, floors that import downwards only, no import cycle.
+
+Floors, from the ground up (README, "Layout"; ``suite/__init__.py``)::
+
+    0 gnibench.suite.foundation   errors, parameter schemas and bounds, status, disk cache, templates
+    1 gnibench.problems           problem records, sympy -> numba source
+    2 gnibench.methods            method and modifier records, kernel templates, external engines
+    3 gnibench.suite.cell         specs, code generation, the driver facade, solve, sections, references
+    4 gnibench.suite.metrics      measurements of a trajectory
+    5 gnibench.suite.runs         experiments, runner, tables, storage, bench
+    6 gnibench.reports            reports from tables
+    7 gnibench.suite.cli          the command line
+
+A module may import from its own floor or below. Every import counts, also those made inside a
+function (they are for start-up time only, never to dodge a circle).
+"""
+from __future__ import annotations
+
+import ast
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGE_DIRS = ("suite", "problems", "methods", "reports")
+FLOORS = (
+    ("gnibench.suite.foundation", 0),
+    ("gnibench.problems", 1),
+    ("gnibench.methods", 2),
+    ("gnibench.suite.cell", 3),
+    ("gnibench.suite.metrics", 4),
+    ("gnibench.suite.runs", 5),
+    ("gnibench.reports", 6),
+    ("gnibench.suite.cli", 7),
+)
+# package markers with no code of their own (docstrings, the version)
+NEUTRAL = {"gnibench", "gnibench.suite"}
+
+
+def module_files() -> dict[str, Path]:
+    """Module name -> file, for every module of the package."""
+    out = {"gnibench": ROOT / "__init__.py"}
+    for top in PACKAGE_DIRS:
+        for path in sorted((ROOT / top).rglob("*.py")):
+            rel = path.relative_to(ROOT).with_suffix("")
+            parts = list(rel.parts)
+            if parts[-1] == "__init__":
+                parts = parts[:-1]
+            out[".".join(["gnibench", *parts])] = path
+    return out
+
+
+def import_graph() -> dict[str, set[str]]:
+    """Module -> the project modules it imports (anywhere in the file)."""
+    files = module_files()
+    graph: dict[str, set[str]] = {}
+    for name, path in files.items():
+        targets: set[str] = set()
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Import):
+                mods = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+                # `from pkg import mod` imports pkg.mod when it is a module of the project
+                mods = [f"{node.module}.{a.name}" if f"{node.module}.{a.name}" in files
+                        else node.module for a in node.names]
+            else:
+                continue
+            targets.update(m for m in mods if m in files and m != name)
+        graph[name] = targets
+    return graph
+
+
+def floor(module: str) -> int | None:
+    best = None
+    for prefix, level in FLOORS:
+        if module == prefix or module.startswith(prefix + "."):
+            best = level
+    return best
+
+
+def test_every_module_has_a_floor():
+    missing = [m for m in module_files() if m not in NEUTRAL and floor(m) is None]
+    assert not missing, f"modules outside every floor: {missing}"
+
+
+def test_imports_go_downwards_only():
+    graph = import_graph()
+    up = [f"{src} (floor {floor(src)}) imports {dst} (floor {floor(dst)})"
+          for src, dsts in graph.items() for dst in dsts
+          if src not in NEUTRAL and dst not in NEUTRAL and floor(dst) > floor(src)]
+    assert not up, "imports that go up a floor:\n" + "\n".join(sorted(up))
+
+
+def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """Strongly connected components of more than one module, or with a self-loop (Tarjan)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on: set[str] = set()
+    out: list[list[str]] = []
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on.add(v)
+        for w in sorted(graph.get(v, ())):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1 or v in graph.get(v, ()):
+                out.append(sorted(comp))
+
+    sys.setrecursionlimit(10000)
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return out
+
+
+def test_no_import_cycle():
+    found = cycles(import_graph())
+    assert not found, "import cycles:\n" + "\n".join(" <-> ".join(c) for c in found)
+
+
+def test_cycle_detector_finds_a_planted_cycle():
+    graph = {"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}
+    assert cycles(graph) == [["a", "b", "c"]]
+    assert cycles({"a": {"b"}, "b": set()}) == []
+
+
+def test_pyproject_lists_every_package():
+    doc = tomllib.loads((ROOT / "pyproject.toml").read_text())
+    listed = set(doc["tool"]["setuptools"]["packages"])
+    packages = {m for m, p in module_files().items() if p.name == "__init__.py"}
+    assert listed == packages, (f"missing from pyproject: {sorted(packages - listed)}; "
+                                f"listed without an __init__.py: {sorted(listed - packages)}")
+
+
+def test_only_gnibench_is_importable(tmp_path):
+    """Installed, the project is `gnibench` and nothing else: `import suite` fails (run outside
+    the repository, where the current directory would put the folders on sys.path)."""
+    code = ("import importlib, gnibench.suite.cell.solve\n"
+            "for name in ('suite', 'problems', 'methods', 'reports'):\n"
+            "    try:\n"
+            "        importlib.import_module(name)\n"
+            "    except ModuleNotFoundError:\n"
+            "        continue\n"
+            "    raise SystemExit(f'{name} is importable')\n")
+    proc = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, check=False,
+                          text=True)
+    assert proc.returncode == 0, proc.stderr + proc.stdout
