@@ -1,5 +1,5 @@
 """pytest-benchmark timings of the adaptive embedded pairs (kepler-2d, e = 0.6, rtol = atol = 1e-10,
-100 periods, Hairer's HINIT start), as ``gnibench bench`` times them (suite/bench.py,
+100 periods, Hairer's HINIT start), as ``gnibench bench`` times them (suite/runs/bench.py,
 ``bench_adaptive``).
 
 Run with ``pytest benchmarks --benchmark-only``. The cell is loaded and warmed up before timing;
@@ -16,11 +16,11 @@ from gnibench.suite.runs.bench import ADAPTIVE_PERIODS, ADAPTIVE_TOL, adaptive_c
 
 @pytest.mark.parametrize("method", ["dopri5", "dop853"])
 def test_kepler_adaptive(benchmark, method):
-    integrate_adaptive, y0, par, _ = adaptive_cell(method)
+    bound, cfg, _ = adaptive_cell(method)
     t_end = ADAPTIVE_PERIODS * 2 * math.pi
     benchmark.group = "kepler-2d adaptive rtol=atol=1e-10, 100 periods"
     _, nacc, nrej, _, y = benchmark.pedantic(run_adaptive,
-                                             args=(integrate_adaptive, y0, par, t_end),
+                                             args=(bound, cfg, t_end),
                                              rounds=20, iterations=1, warmup_rounds=1)
     assert y.shape == (4,)
     benchmark.extra_info.update(method=method, tol=ADAPTIVE_TOL, periods=ADAPTIVE_PERIODS,

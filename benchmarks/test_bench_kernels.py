@@ -16,10 +16,10 @@ STEPS = 200_000
 
 @pytest.mark.parametrize("method", ["rk4", "stormer-verlet"])
 def test_kepler_integrate(benchmark, method):
-    integrate, y0, par = compiled_cell(method)
+    bound, cfg = compiled_cell(method)
     benchmark.group = "kepler-2d"
     benchmark.extra_info.update(method=method, steps=STEPS, h=H)
-    _, y = benchmark.pedantic(run_steps, args=(integrate, y0, par, STEPS), rounds=10, iterations=1,
+    _, y = benchmark.pedantic(run_steps, args=(bound, cfg, STEPS), rounds=10, iterations=1,
                               warmup_rounds=1)
     assert y.shape == (4,)
     benchmark.extra_info["ns_per_step"] = benchmark.stats.stats.min * 1e9 / STEPS

@@ -36,8 +36,8 @@ def _generate(gammas):
         for g in gammas:
             for block, w in (("u", 0), ("v", 1)):
                 lines += [f"    y, a, b, s = pstep_{block}(y, {0.5 * g!r} * h, par, ws[{w}])",
-                          "    nf += a", "    nj += b", "    if s != 0:", "        return y, nf, nj, s"]
-        lines.append("    return y, nf, nj, 0")
+                          "    nf += a", "    nj += b", "    if s != STATUS_OK:", "        return y, nf, nj, s"]
+        lines.append("    return y, nf, nj, STATUS_OK")
         return (src_u + src_v + f"\n@njit(cache=True)\ndef make_ws():\n    return ({ws_u}, {ws_v})\n"
                 + "\n".join(lines) + "\n")
     return generate

@@ -57,7 +57,7 @@ def generate_erk(tab: Tableau):
         s = max(j for j, b in enumerate(tab.b) if b != 0) + 1   # trailing zero-weight stages unused
         lines, arities = stage_lines(tab, s)
         lines = ["\n@njit(cache=True)\ndef step(y, h, par, ws):"] + lines
-        lines.append(f"    return {combination(tab.b[:s], arities)}, {float(s)!r}, 0.0, 0")
+        lines.append(f"    return {combination(tab.b[:s], arities)}, {float(s)!r}, 0.0, STATUS_OK")
         ws = "\n@njit(cache=True)\ndef make_ws():\n    return 0\n"
         return helpers(ctx.n, arities) + ws + "\n".join(lines) + "\n"
 

@@ -137,7 +137,7 @@ def generate(ctx) -> str:
             + "\n@njit(cache=True)\ndef make_ws():\n    return 0\n"
             + "\n@njit(cache=True)\ndef step(y, h, par, ws):\n"
             + "    e = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)\n"
-            + body + f"    return ({final}), {float(len(plan))!r}, 0.0, 0\n")
+            + body + f"    return ({final}), {float(len(plan))!r}, 0.0, STATUS_OK\n")
 
 
 _SO4_CHECKED: dict[str, bool] = {}

@@ -20,7 +20,7 @@ def _explicit_block(name: str, n: int, i_idx, e_idx) -> str:
     comma = "," if n == 1 else ""
     return (f"\n@njit(cache=True)\ndef {name}(y, h, par, ws):\n"
             f"    g = f(y, par)\n    w = ({first}{comma})\n    g = f(w, par)\n"
-            f"    return ({second}{comma}), 1.0, 0.0, 0\n")
+            f"    return ({second}{comma}), 1.0, 0.0, STATUS_OK\n")
 
 
 def _block(ctx, which: str) -> tuple[str, str]:

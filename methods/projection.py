@@ -43,10 +43,10 @@ def _generate(ctx, values, k, off):
                       for i in range(n))
     body.append(f"z = ({comps}{',' if n == 1 else ''})")
     step = " + ".join(f"abs(d{a}) * math.sqrt(G{a}{a})" for a in range(q))
-    body += [f"dnorm = {step}", "if newton_done(dnorm, prev, scale):", "    return z, 0",
+    body += [f"dnorm = {step}", "if newton_done(dnorm, prev, scale):", "    return z, STATUS_OK",
              "prev = dnorm"]
     lines += [f"    {ln}" for ln in body]
-    lines.append("return z, 2")
+    lines.append("return z, STATUS_NEWTON_FAILED")
     return (f"\n@njit(cache=True)\ndef proj{k}(y, par):\n    # orthogonal projection, HNW IV.4\n"
             + "".join(f"    {ln}\n" for ln in lines))
 

@@ -24,12 +24,12 @@ def cap(pids, n: int, registry) -> list[str]:
 
 @functools.cache
 def base_module(spec: str):
-    """(module, problem Bound, par) of a problem's generated code (the plain euler cell)."""
-    from gnibench.suite.cell.codegen import load
-    from gnibench.suite.cell.spec import parse_method, parse_problem
+    """(module, problem Bound, par) of a problem's generated code (its own compiled module)."""
+    from gnibench.suite.cell.codegen import load_problem
+    from gnibench.suite.cell.spec import parse_problem
 
     prob = parse_problem(spec)
-    mod, _, _ = load(prob, parse_method("euler", prob))
+    mod, _ = load_problem(prob)
     return mod, prob, np.array(prob.record.par(prob.values), dtype=np.float64)
 
 

@@ -1,6 +1,6 @@
 """The C reference of the adaptive benchmark is the same algorithm as the numba kernel.
 
-suite/bench_c/kepler_adaptive.c ports methods/kernels/adaptive.py and the generated step_err
+suite/runs/bench_c/kepler_adaptive.c ports methods/kernels/adaptive.py and the generated step_err
 operation for operation (built with -ffp-contract=off), with the pair's coefficients written from
 the same ``Pair`` record (``gnibench.suite.runs.bench.pair_header``). So on kepler-2d the accepted and rejected
 step counts must be equal and the final states agree to round-off (measured: bit-identical). This
@@ -23,8 +23,9 @@ PERIODS = 10
 @pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc not found")
 @pytest.mark.parametrize("method", ["dopri5", "dop853"])
 def test_c_port_takes_the_same_steps(method, tmp_path: Path):
-    integrate_adaptive, y0, par, pair = adaptive_cell(method)
-    _, nacc, nrej, nfev, y = run_adaptive(integrate_adaptive, y0, par, PERIODS * 2 * math.pi)
+    bound, cfg, pair = adaptive_cell(method)
+    y0 = np.array(bound.record.y0(bound.values))
+    _, nacc, nrej, nfev, y = run_adaptive(bound, cfg, PERIODS * 2 * math.pi)
     exe = build_c_adaptive(tmp_path, method, pair)
     c = time_c_adaptive(exe, y0, periods=PERIODS, repeats=1)
     assert (c["accepted"], c["rejected"], c["nfev"]) == (nacc, nrej, nfev)

@@ -22,8 +22,9 @@ import pytest
 from gnibench import methods
 from gnibench.problems import REGISTRY
 from gnibench.problems.codegen import symbolic
-from gnibench.suite.cell.solve import prepare
+from gnibench.suite.cell.spec import prepare
 from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.metrics.invariants import invariant_errors
 from support import FULL, rate_scale
 
 COMPILED = getattr(methods, "COMPILED", methods.METHODS)   # external engines have their own tests
@@ -124,7 +125,7 @@ def relative_drift(pid, mid, names, steps=STEPS):
         k = r.integral_names.index(name)
         size = _KINDS[pid][name][1]
         scale = max(float(np.max(np.abs(size(y)))) for y in r.y)
-        out[name] = float(np.max(np.abs(r.invariant_errors[:, k]))) / scale
+        out[name] = float(np.max(np.abs(invariant_errors(r)[:, k]))) / scale
     return out
 
 

@@ -30,8 +30,11 @@ import pytest
 from gnibench.methods import COMPILED, generating_function
 from gnibench.methods.generating_function import generating_terms
 from gnibench.problems import REGISTRY
-from gnibench.suite.cell.solve import prepare, solve
+from gnibench.suite.cell.solve import solve
+from gnibench.suite.cell.spec import prepare
 from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.metrics.global_error import global_errors
+from gnibench.suite.metrics.invariants import invariant_errors
 from test_orders import CELLS as ORDER_CELLS
 from test_orders import TOL as ORDER_TOL
 from test_orders import observed_order
@@ -109,7 +112,7 @@ def test_order_on_harmonic_oscillator():
         r = solve("harmonic-oscillator", f"{MID}:h={T / n!r}", steps=n, every=n)
         assert r.status == "ok"
         hs.append(T / n)
-        errs.append(r.global_error[-1])
+        errs.append(global_errors(r)[-1])
     p, used = observed_order(np.array(hs), np.array(errs))
     assert used >= 3 and abs(p - 4) <= ORDER_TOL, (p, errs)
 
@@ -138,10 +141,10 @@ def test_energy_error_bounded_on_kepler(mid, bounded):
     momentum of the rotations."""
     r = solve("kepler-2d", f"{mid}:h=0.01", t_end=200 * np.pi, every=10)
     assert r.status == "ok"
-    first, last = _tenths(r.invariant_errors[:, r.integral_names.index("H")])
+    first, last = _tenths(invariant_errors(r)[:, r.integral_names.index("H")])
     assert (last <= DRIFT_RATIO * first) == bounded, (first, last)
     if mid == MID:
-        assert np.max(np.abs(r.invariant_errors[:, r.integral_names.index("L")])) <= 1e-13
+        assert np.max(np.abs(invariant_errors(r)[:, r.integral_names.index("L")])) <= 1e-13
 
 
 def test_bounded_and_below_merson_on_a_chaotic_orbit():
@@ -150,9 +153,9 @@ def test_bounded_and_below_merson_on_a_chaotic_orbit():
     problem without identifications)."""
     gf = solve("henon-heiles", f"{MID}:h=0.05", t_end=1e5, every=100)
     merson = solve("henon-heiles", "merson:adaptive=false,h=0.05", t_end=1e5, every=100)
-    first, last = _tenths(gf.invariant_errors[:, 0])
+    first, last = _tenths(invariant_errors(gf)[:, 0])
     assert last <= DRIFT_RATIO * first, (first, last)
-    assert _tenths(merson.invariant_errors[:, 0])[1] > 10 * max(first, last)
+    assert _tenths(invariant_errors(merson)[:, 0])[1] > 10 * max(first, last)
 
 
 def test_fig32_observer_keeps_H_best_on_the_geodesic_flow():
@@ -162,7 +165,7 @@ def test_fig32_observer_keeps_H_best_on_the_geodesic_flow():
     clearly appears"). (choice) t <= 1000 and θ = 1, which [B] does not state. Measured max |ΔH|:
     observer 9.0e-11 (8.5e-11 first tenth, 8.8e-11 last), merson 7.2e-10, gauss4 4.4e-10,
     generating-function4 4.1e-7, the last three growing linearly."""
-    runs = {m: solve("geodesic-genus2", m, t_end=1000.0, every=10).invariant_errors[:, 0]
+    runs = {m: invariant_errors(solve("geodesic-genus2", m, t_end=1000.0, every=10))[:, 0]
             for m in ("merson:h=0.01+observer:theta=1", "merson:h=0.01", "gauss4:h=0.01",
                       f"{MID}:h=0.01")}
     observer = next(iter(runs.values()))
@@ -192,7 +195,7 @@ def test_composes_with_projection():
     """A step modifier maps each step's result: H is then kept to round-off."""
     r = solve("pendulum", f"{MID}:h=0.1+projection:on=H", steps=200, every=200)
     assert r.status == "ok"
-    assert np.max(np.abs(r.invariant_errors)) <= 1e-14
+    assert np.max(np.abs(invariant_errors(r))) <= 1e-14
 
 
 def test_warm_run_reads_the_generated_text_from_disk(monkeypatch):

@@ -5,6 +5,8 @@ import numpy as np
 import pytest
 from gnibench.problems import kepler_ks
 from gnibench.suite.cell.solve import solve
+from gnibench.suite.metrics.global_error import global_errors
+from gnibench.suite.metrics.invariants import invariant_errors
 
 
 def test_forward_back_maps_round_trip():
@@ -34,21 +36,21 @@ def test_ks_rk4_agrees_with_plain_rk4_on_a_mild_orbit():
     assert ks.status == plain.status == "ok"
     assert 5.5 < t_final < 6.5                           # Δs = 1 per revolution (a = 1, mu = 4 pi^2)
     assert np.abs(ks.y[-1] - plain.y[-1]).max() < 1e-8
-    assert ks.global_error[-1] < 1e-8 and plain.global_error[-1] < 1e-8
+    assert global_errors(ks)[-1] < 1e-8 and global_errors(plain)[-1] < 1e-8
 
 
 def test_ks_keeps_the_eccentric_orbit_where_plain_rk4_fails():
     """[B] §5: on the e = 0.8 orbit K-S regularization gives a far smaller global error."""
     ks = solve("kepler-3d:ks=true", "rk4:h=0.001", steps=10000, every=10000)
     plain = solve("kepler-3d", "rk4:h=0.001", steps=10000, every=10000)
-    assert ks.global_error[-1] < 1e-3 * plain.global_error[-1]
+    assert global_errors(ks)[-1] < 1e-3 * global_errors(plain)[-1]
 
 
 def test_ks_runs_under_symplectic_and_modified_methods():
     """The K-S system is separable in the partition ((v, t), u): Yoshida runs explicitly on it."""
     r = solve("kepler-3d:ks=true", "yoshida4:h=0.095", steps=20000, every=100)
     assert r.status == "ok"
-    err_h = np.abs(r.invariant_errors[:, 0])          # H: bounded, no secular growth
+    err_h = np.abs(invariant_errors(r)[:, 0])          # H: bounded, no secular growth
     half = len(err_h) // 2
     assert err_h[half:].max() < 1.5 * err_h[:half].max()
     r = solve("kepler-3d:ks=true", "rk4:h=0.01+observer:on=K", steps=500, every=500)

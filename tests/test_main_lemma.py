@@ -24,6 +24,7 @@ import pytest
 from gnibench.problems import REGISTRY
 from gnibench.problems.codegen import problem_meta
 from gnibench.suite.cell.solve import solve
+from gnibench.suite.metrics.invariants import invariant_errors
 from support import FULL, cap, gradients, integrals_at_start, rate_scale
 
 THETA = 2.0
@@ -71,7 +72,7 @@ def observer_decay(pid, name, h, d):
     r = solve(pid, f"rk4:h={h!r}+observer:on={name},theta={THETA},H0={hs + d!r}", t_end=T_END,
               every=max(1, int(0.05 / h)))
     assert r.status == "ok", r.reason
-    eps = d - r.invariant_errors[:, k]          # H0 - H(ξ_n)
+    eps = d - invariant_errors(r)[:, k]          # H0 - H(ξ_n)
     m = np.abs(eps) > WINDOW * d
     assert m.sum() > 20 and r.t[m][-1] > 0.6 * T_END
     rate = -np.polyfit(r.t[m], np.log(np.abs(eps[m])), 1)[0]
@@ -113,7 +114,7 @@ def test_observer_diagonal_gains_act_per_integral():
               f"rk4:h=0.002+observer:on=H1/H2,theta=1/3,H0={float(h1 + d[0])!r}/{float(h2 + d[1])!r}",
               t_end=4.0, every=20)
     assert r.status == "ok"
-    eps = d[None, :] - r.invariant_errors
+    eps = d[None, :] - invariant_errors(r)
     expect = d[None, :] * np.exp(-th[None, :] * r.t[:, None])
     assert np.max(np.abs(eps - expect) / np.abs(d)) < 1e-8       # measured 1.2e-10
 
@@ -127,7 +128,7 @@ def test_euler_observer_limit_R(theta):
         assert 2 * h < theta                                       # the paper's condition
         n = int(60 / (h * theta))
         r = solve("harmonic-oscillator", f"euler:h={h}+observer:theta={theta}", steps=n, every=n // 10)
-        H = H0 + r.invariant_errors[:, 0]
+        H = H0 + invariant_errors(r)[:, 0]
         R = H0 / (1 - 2 * (1 - np.sqrt(1 - h * h)) / (h * theta))
         assert abs(H[-1] - R) <= 1e-12 * R, (h, H[-1], R)
         assert abs(H[-1] - H[-2]) <= 1e-12 * R                     # reached the limit
@@ -142,7 +143,7 @@ def test_penalty_logistic_law_on_oscillator():
     """[B] (2.10)-(2.11): on H = (p² + q²)/2 the penalty gives H' = 2θ H (H0 - H) (logistic)."""
     Hs, H0, theta = 0.5, 0.6, 1.5
     r = solve("harmonic-oscillator", f"rk4:h=0.001+penalty:theta={theta},H0={H0}", t_end=5.0, every=50)
-    H = Hs + r.invariant_errors[:, 0]
+    H = Hs + invariant_errors(r)[:, 0]
     exact = H0 * Hs / (Hs + (H0 - Hs) * np.exp(-2 * theta * H0 * r.t))
     assert np.max(np.abs(H - exact)) < 1e-12                       # measured 3e-14
 
@@ -155,7 +156,7 @@ def test_penalty_decays_at_rate_theta_grad_squared():
     d, theta = 0.05, 2.0
     r = solve("pendulum", f"rk4:h=0.001+penalty:theta={theta},H0={hs + d!r}", t_end=8.0, every=10)
     assert r.status == "ok"
-    eps = d - r.invariant_errors[:, 0]
+    eps = d - invariant_errors(r)[:, 0]
     assert np.all(eps > 0) and np.all(np.diff(eps) < 0)            # monotone decay, no overshoot
     p, q = r.y[:, 0], r.y[:, 1]
     g2 = p * p + np.sin(q) ** 2

@@ -9,6 +9,8 @@ import math
 import numpy as np
 import pytest
 from gnibench.suite.cell.solve import solve
+from gnibench.suite.metrics.global_error import global_errors
+from gnibench.suite.metrics.invariants import invariant_errors
 from test_orders import observed_order
 
 PERIOD = 2.0 * math.pi
@@ -24,8 +26,8 @@ def test_tight_tolerance_reaches_1e_12_on_kepler():
         r = solve("kepler-2d", spec, t_end=PERIOD, every=10**6)
         assert r.status == "ok"
         assert abs(r.t[-1] - PERIOD) == 0.0
-        assert r.global_error[-1] <= 1e-12, (spec, r.global_error[-1])
-        assert np.max(np.abs(r.invariant_errors[-1])) <= 1e-13
+        assert global_errors(r)[-1] <= 1e-12, (spec, global_errors(r)[-1])
+        assert np.max(np.abs(invariant_errors(r)[-1])) <= 1e-13
 
 
 def test_error_roughly_proportional_to_tolerance():
@@ -34,7 +36,7 @@ def test_error_roughly_proportional_to_tolerance():
     for tol in tols:
         r = solve("kepler-2d", f"odex:rtol={tol!r},atol={tol!r}", t_end=2 * PERIOD, every=10**6)
         assert r.status == "ok"
-        errs.append(r.global_error[-1])
+        errs.append(global_errors(r)[-1])
         costs.append(r.nfev[-1])
     slope = np.polyfit(np.log(tols), np.log(errs), 1)[0]
     assert 0.6 <= slope <= 1.3, (slope, errs)
@@ -46,8 +48,8 @@ def test_rejected_steps_are_counted():
     """A far too large first step is rejected; counters are cumulative and match the metadata."""
     r = solve("kepler-2d", "odex:rtol=1e-10,atol=1e-10,h0=3.0", t_end=PERIOD, every=1)
     assert r.status == "ok"
-    assert r.rejected[-1] >= 1 and r.rejected[-1] == r.meta["rejected"]
-    assert r.steps[-1] == r.meta["accepted"] == len(r.t) - 1
+    assert r.rejected[-1] >= 1 and r.rejected[-1] == r.provenance["rejected"]
+    assert r.steps[-1] == r.provenance["accepted"] == len(r.t) - 1
     assert np.all(np.diff(r.rejected) >= 0) and np.all(np.diff(r.nfev) > 0)
     short = solve("kepler-2d", "odex:rtol=1e-10,atol=1e-10,h0=3.0,max_steps=3", t_end=PERIOD)
     assert short.status == "max_steps" and short.steps[-1] + short.rejected[-1] == 3
@@ -72,7 +74,7 @@ def test_fixed_mode_has_order_2k(k):
         r = solve("kepler-2d", f"odex:adaptive=false,k={k},h={T / n!r}", steps=n, every=n)
         assert r.status == "ok" and r.nfev[-1] == n * (1 + sum(2 * j for j in range(1, k + 1)))
         hs.append(T / n)
-        errs.append(r.global_error[-1])
+        errs.append(global_errors(r)[-1])
     p, used = observed_order(np.array(hs), np.array(errs))
     assert used >= 3 and abs(p - 2 * k) <= 0.35, (p, errs)
 
@@ -80,6 +82,6 @@ def test_fixed_mode_has_order_2k(k):
 @pytest.mark.parametrize("modifier", ["observer:on=H/L", "projection:on=H/L"])
 def test_composes_with_modifiers(modifier):
     r = solve("kepler-2d", f"odex:rtol=1e-9,atol=1e-9+{modifier}", t_end=2 * PERIOD, every=10**6)
-    assert r.status == "ok" and r.global_error[-1] < 1e-5
-    drift = np.max(np.abs(r.invariant_errors[-1, :2]))
+    assert r.status == "ok" and global_errors(r)[-1] < 1e-5
+    drift = np.max(np.abs(invariant_errors(r)[-1, :2]))
     assert drift < (1e-13 if modifier.startswith("projection") else 1e-8), drift

@@ -22,8 +22,10 @@ import numpy as np
 import pytest
 from gnibench import methods
 from gnibench.problems import REGISTRY
-from gnibench.suite.cell.solve import prepare, solve
+from gnibench.suite.cell.solve import solve
+from gnibench.suite.cell.spec import prepare
 from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.metrics.global_error import global_errors
 
 # (problem spec, T, n0): nonlinear problems with exact solutions
 ORDER_CASES = {
@@ -125,7 +127,7 @@ def test_observed_order_matches_declared(mid, pid):
         ok = r.status == "ok" and r.steps[-1] == n
         assert not ok or abs(r.t[-1] - T) < 1e-12 * T
         hs.append(T / n)
-        errs.append(r.global_error[-1] if ok else np.inf)
+        errs.append(global_errors(r)[-1] if ok else np.inf)
     hs, errs = np.array(hs), np.array(errs)
     p, used = observed_order(hs, errs)
     order = COMPILED[mid].order

@@ -12,12 +12,15 @@ import mpmath as mp
 import numpy as np
 import pytest
 from gnibench.problems.base import Model, Problem
+from gnibench.suite.cell.grid import SampleGrid, grid
 from gnibench.suite.cell.reference import cache_path, parse_reference, reference, reference_solution
-from gnibench.suite.cell.solve import SampleGrid, grid, solve
+from gnibench.suite.cell.solve import solve
 from gnibench.suite.cell.spec import parse_problem
 from gnibench.suite.cli.main import main
 from gnibench.suite.foundation.errors import UserError
 from gnibench.suite.foundation.params import Bound, bind
+from gnibench.suite.metrics.global_error import global_errors
+from gnibench.suite.metrics.invariants import invariant_errors
 
 PERIOD = 2 * math.pi                         # kepler-2d, H0 = -1/2: a = 1, period 2 pi
 EPS = float(np.finfo(float).eps)
@@ -188,19 +191,19 @@ def test_outer_solar_system_heyoka_and_ias15_agree_at_200000_days(tmp_path, monk
 
 def test_solve_reference_options():
     default = solve("kepler-2d", "rk4:h=0.05", steps=40, every=10)
-    assert default.meta["reference"]["backend"] == "exact"
+    assert default.reference.describe["backend"] == "exact"
     heyoka = solve("kepler-2d", "rk4:h=0.05", steps=40, every=10,
                    reference="heyoka:precision=long double")
-    ref = heyoka.meta["reference"]
+    ref = heyoka.reference.describe
     assert (ref["backend"], ref["precision"]) == ("heyoka", "long double")
     assert ref["tol"] == float(np.finfo(np.longdouble).eps)
-    assert np.allclose(heyoka.global_error, default.global_error, rtol=1e-6, atol=1e-13)
+    assert np.allclose(global_errors(heyoka), global_errors(default), rtol=1e-6, atol=1e-13)
     none = solve("kepler-2d", "rk4:h=0.05", steps=40, every=10, reference="none")
-    assert none.global_error is None and none.meta["reference"]["backend"] is None
+    assert none.reference is None
     lv = solve("lotka-volterra", "rk4:h=0.05", steps=40, every=10)
-    assert lv.global_error is None                       # no exact solution, no reference asked
+    assert lv.reference is None                       # no exact solution, no reference asked
     lv_ref = solve("lotka-volterra", "rk4:h=0.05", steps=40, every=10, reference="heyoka")
-    assert lv_ref.global_error[0] == 0.0 and 0.0 < lv_ref.global_error[-1] < 1e-5
+    assert global_errors(lv_ref)[0] == 0.0 and 0.0 < global_errors(lv_ref)[-1] < 1e-5
 
 
 @pytest.mark.parametrize("args,message", [
@@ -255,11 +258,11 @@ def test_external_methods_through_solve(method, bound):
     double 2.8e-17, real128 0 (the correctly rounded truth), IAS15 7.9e-15, WHFast (exact for one
     Kepler orbit up to its Kepler solver's round-off) 2.1e-14."""
     r = solve("kepler-2d", method, t_end=PERIOD, every=100)
-    assert r.status == "ok" and r.t[-1] == PERIOD and r.meta["reference"]["backend"] == "exact"
+    assert r.status == "ok" and r.t[-1] == PERIOD and r.reference.describe["backend"] == "exact"
     assert np.max(np.abs(r.y - _as_double(kepler_truth(r.y0, r.t)))) <= bound
-    assert np.all(r.invariant_errors[0] == 0.0) and np.max(np.abs(r.invariant_errors)) <= 1e-13
+    assert np.all(invariant_errors(r)[0] == 0.0) and np.max(np.abs(invariant_errors(r))) <= 1e-13
     assert r.steps[0] == 0 and np.all(np.diff(r.steps) > 0)
-    engine = r.meta["engine"]
+    engine = r.provenance["engine"]
     if method.startswith("rebound-whfast"):
         assert np.array_equal(r.nfev, r.steps) and r.steps[-1] == 629      # 628 steps + short one
     else:
@@ -292,6 +295,6 @@ def test_whfast_on_the_outer_solar_system_keeps_momentum():
     r = solve("outer-solar-system", "rebound-whfast:h=10", t_end=20000.0, every=500,
               reference="rebound")
     names = list(r.integral_names)
-    momentum = r.invariant_errors[:, [names.index(k) for k in ("Px", "Py", "Pz")]]
-    assert np.max(np.abs(momentum)) <= 1e-16 and np.max(np.abs(r.invariant_errors[:, 0])) <= 1e-12
-    assert r.global_error[-1] <= 1e-6
+    momentum = invariant_errors(r)[:, [names.index(k) for k in ("Px", "Py", "Pz")]]
+    assert np.max(np.abs(momentum)) <= 1e-16 and np.max(np.abs(invariant_errors(r)[:, 0])) <= 1e-12
+    assert global_errors(r)[-1] <= 1e-6

@@ -3,7 +3,7 @@ a method is symmetric if Φ_h^* = Φ_h, i.e. Φ_{-h} = Φ_h^{-1}).
 
 Test: integrate N = 1000 steps of h from y0, then N steps of -h from the final point, and require
 the return to y0 to round-off. Negative steps are not allowed by the method specs (h > 0 is
-validated), so the compiled cell is driven directly: ``gnibench.suite.cell.solve._compiled_cell`` loads the
+validated), so the compiled cell is driven directly: ``gnibench.suite.cell.compiled.compile_cell`` loads the
 module and builds ``par`` exactly as ``solve`` does, and its ``integrate(y0, par, h, ...)`` takes
 any h. (Reversing the momenta, p -> -p, would test ρ-reversibility instead, which needs a
 ρ-reversible problem *and* a symmetric method; stepping with -h tests the symmetry of the method
@@ -36,7 +36,8 @@ import numpy as np
 import pytest
 from gnibench import methods
 from gnibench.problems import REGISTRY
-from gnibench.suite.cell.solve import _compiled_cell, prepare
+from gnibench.suite.cell.compiled import FIXED_STATE, compile_cell
+from gnibench.suite.cell.spec import prepare
 from gnibench.suite.foundation.errors import UserError
 from support import cap, rate_scale
 
@@ -80,14 +81,15 @@ def forth_and_back(pid: str, mid: str, steps: int = STEPS) -> tuple[float, float
     """(|y_back - y0|_∞ / scale, |y_N - y0|_∞ / scale), scale = max(|y0|_∞, |y_N|_∞)."""
     h = 0.05 / rate_scale(pid)
     problem, cfg = prepare(pid, f"{mid}:h={h!r}")
-    cell = _compiled_cell(problem, cfg)
+    cell = compile_cell(problem, cfg)
     n = problem.record.dim
 
     def run(y, hh):
-        out_t, out_y, out_c = np.empty(3), np.empty((3, n)), np.zeros((3, 4))
-        code, done, rows = cell.mod.integrate(np.array(y, dtype=np.float64), cell.par, hh, steps,
-                                              hh, steps, out_t, out_y, out_c)
-        assert code == 0 and done == steps, (pid, mid, hh, code, done)
+        out_t, out_y, out_c = np.empty(4), np.empty((4, n)), np.zeros((4, 5))
+        y_io, st = np.array([y, np.zeros(n)], dtype=np.float64), np.zeros(FIXED_STATE)
+        code, rows = cell.kernel.integrate(y_io, st, cell.par, hh, steps, hh, steps, 1 << 40,
+                                           out_t, out_y, out_c)
+        assert code == 0 and st[0] == steps, (pid, mid, hh, code, st[0])
         return out_y[rows - 1].copy()
 
     y0 = np.array(cell.y0, dtype=np.float64)

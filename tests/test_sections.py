@@ -19,10 +19,13 @@ import pytest
 from gnibench import problems
 from gnibench.problems import REGISTRY
 from gnibench.problems.base import Section
-from gnibench.suite.cell.sections import crossing_intervals, solve_section
+from gnibench.suite.cell.sections import crossing_intervals
 from gnibench.suite.cell.solve import solve
 from gnibench.suite.cli.main import main
 from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.metrics.compute import apply
+from gnibench.suite.metrics.global_error import global_errors
+from gnibench.suite.runs.tables import sample_frame
 
 OSC_ID = "harmonic-oscillator-sec-test"
 P = f"{OSC_ID}:q0=0,p0=1"
@@ -39,6 +42,17 @@ def osc(monkeypatch):
     return rec
 
 
+
+def solve_section(problem: str, method: str, crossings: int, **kw):
+    """The section crossings of a cell, as ``gnibench solve --section`` computes them."""
+    return solve(problem, method, section=crossings, **kw)
+
+
+def columns(r) -> dict:
+    """The columns of a section table, as ``gnibench solve --section`` writes them."""
+    out, _ = apply(r)
+    return {c: v.to_numpy() for c, v in sample_frame(r, out).items()}
+
 def test_crossing_intervals_half_open():
     # a sample exactly on the section belongs to the interval ending there; t = 0 is never one
     assert crossing_intervals(np.array([0.0, -1.0, 1.0, 0.0, -2.0, -1.0])).tolist() == [1, 2]
@@ -48,7 +62,7 @@ def test_crossing_intervals_half_open():
 def test_exact_crossings_with_small_error(osc):
     """rk4 with h = 5e-4 (global error ~1e-15 here): the crossings are t = 2 pi k, p = 1."""
     r = solve_section(P, "rk4:h=0.0005", 3, t_end=25.0)
-    c = r.columns
+    c = columns(r)
     assert r.status == "ok" and r.reason == ""
     assert c["crossing"].tolist() == [1, 2, 3]
     assert np.max(np.abs(c["q"])) <= TOL
@@ -56,7 +70,7 @@ def test_exact_crossings_with_small_error(osc):
     assert np.max(np.abs(c["p"] - 1.0)) <= 1e-13
     assert list(c) == ["crossing", "t", "p", "q", "err_H"]
     assert np.max(np.abs(c["err_H"] - ((c["p"] ** 2 + c["q"] ** 2) / 2 - 0.5))) <= 1e-15
-    assert r.meta["max_abs_g"] <= TOL
+    assert r.provenance["max_abs_g"] <= TOL
 
 
 def test_crossing_is_on_the_numerical_orbit(osc):
@@ -64,7 +78,7 @@ def test_crossing_is_on_the_numerical_orbit(osc):
     and on the exact flow through the sample before the crossing (not the exact crossing)."""
     h = 0.1
     r = solve_section(P, f"rk4:h={h}", 3, t_end=25.0)
-    c = r.columns
+    c = columns(r)
     assert np.max(np.abs(c["q"])) <= TOL
     assert np.max(np.abs(c["t"] - 2 * math.pi * np.arange(1, 4))) > 1e-7     # numerical, not exact
     traj = solve(P, f"rk4:h={h}", t_end=25.0)
@@ -81,7 +95,7 @@ def test_same_method_step_reproduces_the_point(osc):
     """One rk4 step of the gap t* - t_n from the sample y_n lands on the located point."""
     h = 1e-3
     r = solve_section(P, f"rk4:h={h}", 1, t_end=7.0)
-    ts, ys = r.columns["t"][0], np.array([r.columns["q"][0], r.columns["p"][0]])
+    ts, ys = columns(r)["t"][0], np.array([columns(r)["q"][0], columns(r)["p"][0]])
     traj = solve(P, f"rk4:h={h}", t_end=7.0)
     n = math.floor(ts / h)
     q0, p0 = (float(x) for x in traj.y[n])
@@ -94,7 +108,7 @@ def test_same_method_step_reproduces_the_point(osc):
                                     "rk4:h=0.05+observer:theta=10"])       # modified field
 def test_every_kind_of_method_is_located(osc, method):
     r = solve_section(P, method, 2, t_end=15.0)
-    c = r.columns
+    c = columns(r)
     assert r.status == "ok" and len(c["t"]) == 2
     assert np.max(np.abs(c["q"])) <= TOL and np.all(c["p"] > 0)
     assert np.max(np.abs(c["t"] - 2 * math.pi * np.arange(1, 3))) <= 1e-3
@@ -161,15 +175,15 @@ def test_dense_locator_finds_the_exact_crossings(osc, method):
     Measured: |q| = 0 (dop853, one 2.2e-19); |t - 2 pi k| <= 2.8e-13 (dop853), 2.5e-13 (dopri5);
     |p - 1| <= 3.4e-13 (dop853), 5.8e-12 (dopri5)."""
     r = solve_section(P, method, 3, t_end=20.0)
-    c = r.columns
-    assert r.status == "ok" and r.meta["locator"] == "dense" and "henon" not in r.meta
-    assert r.meta["dense"]["fallbacks"] == 0 and 1 <= r.meta["dense"]["max_iterations"] <= 10
-    assert np.max(np.abs(c["q"])) <= TOL and r.meta["max_abs_g"] <= TOL
+    c = columns(r)
+    assert r.status == "ok" and r.provenance["locator"] == "dense" and "henon" not in r.provenance
+    assert r.provenance["dense"]["fallbacks"] == 0 and 1 <= r.provenance["dense"]["max_iterations"] <= 10
+    assert np.max(np.abs(c["q"])) <= TOL and r.provenance["max_abs_g"] <= TOL
     traj = solve(P, method, t_end=20.0)
     for k in range(3):
         n = np.searchsorted(traj.t, c["t"][k]) - 1              # t_n < t* <= t_n+1
         assert traj.y[n, 0] < 0 <= traj.y[n + 1, 0]
-        around = max(traj.global_error[n], traj.global_error[n + 1])
+        around = max(global_errors(traj)[n], global_errors(traj)[n + 1])
         print(f"{method} k={k + 1}: dt={c['t'][k] - 2 * math.pi * (k + 1):.2e} "
               f"dp={c['p'][k] - 1:.2e} global error around {around:.2e}")
         assert abs(c["t"][k] - 2 * math.pi * (k + 1)) <= 2 * around + 1e-15
@@ -184,10 +198,10 @@ def test_dense_and_henon_locators_agree():
     spec = "dop853:rtol=1e-12,atol=1e-12"
     dense = solve_section("henon-heiles", spec, 10, t_end=200.0)
     henon = solve_section("henon-heiles", spec, 10, t_end=200.0, locator="henon")
-    assert (dense.meta["locator"], henon.meta["locator"]) == ("dense", "henon")
-    a, b = dense.columns, henon.columns
+    assert (dense.provenance["locator"], henon.provenance["locator"]) == ("dense", "henon")
+    a, b = columns(dense), columns(henon)
     assert len(a["t"]) == len(b["t"]) == 10
-    assert max(dense.meta["max_abs_g"], henon.meta["max_abs_g"]) <= TOL
+    assert max(dense.provenance["max_abs_g"], henon.provenance["max_abs_g"]) <= TOL
     state = REGISTRY["henon-heiles"].state
     dt = np.max(np.abs(a["t"] - b["t"]))
     dy = max(np.max(np.abs(a[s] - b[s])) for s in state)
@@ -203,9 +217,9 @@ def test_dense_and_henon_locators_agree():
 ])
 def test_henon_where_dense_output_does_not_apply(osc, method, note):
     r = solve_section(P, method, 2, t_end=15.0)
-    assert r.meta["locator"] == "henon" and note in r.meta["locator_note"]
-    assert "dense" not in r.meta and r.meta["henon"]["max_substeps"] >= 4
-    assert np.max(np.abs(r.columns["q"])) <= TOL and len(r.columns["t"]) == 2
+    assert r.provenance["locator"] == "henon" and note in r.provenance["locator_note"]
+    assert "dense" not in r.provenance and r.provenance["henon"]["max_substeps"] >= 4
+    assert np.max(np.abs(columns(r)["q"])) <= TOL and len(columns(r)["t"]) == 2
 
 
 def test_dense_locator_refused_where_it_does_not_apply(osc):

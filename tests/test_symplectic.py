@@ -27,7 +27,8 @@ import numpy as np
 import pytest
 from gnibench import methods
 from gnibench.problems import REGISTRY
-from gnibench.suite.cell.solve import prepare, solve
+from gnibench.suite.cell.solve import solve
+from gnibench.suite.cell.spec import prepare
 from gnibench.suite.foundation.errors import UserError
 from support import FULL, rate_scale
 

@@ -34,6 +34,11 @@ from gnibench.methods.kernels.free import (
     IORD,
     SAFE,
     STAGES_NEW,
+    STATUS_BUFFER_FULL,
+    STATUS_MAX_STEPS,
+    STATUS_OK,
+    STATUS_PAUSED,
+    STATUS_STEP_TOO_SMALL,
     N,
     dense_eval,
     dense_from_stages,
@@ -89,7 +94,7 @@ def dense_coeffs(y, h, par, fy):
 
 
 def integrate_adaptive(y_io, st, par, t_end, h0, hmax, rtol, atol, every, dt_out, n_out, max_steps,
-                       out_t, out_y, out_c):
+                       budget, out_t, out_y, out_c):
     # st: t, h, facold, reject, nacc, nrej, nfev, started, last_row_step, next grid index (dense)
     # out_c: steps, nfev, njev, rejected and, if it has a 5th column, the size of the accepted step
     # that ends at the sample (Poincaré sections recompute that step: suite/sections.py)
@@ -116,22 +121,26 @@ def integrate_adaptive(y_io, st, par, t_end, h0, hmax, rtol, atol, every, dt_out
     reject = st[3] != 0.0
     nacc, nrej, nfev = int(st[4]), int(st[5]), st[6]
     kout = int(st[9]) if DENSE_OUTPUT else 0
-    status = 0
+    status = STATUS_OK
     last = False
+    stop = nacc + nrej + budget              # attempts in this call (STATUS_PAUSED after them)
     while True:
         if row >= rows:
-            status = 5
+            status = STATUS_BUFFER_FULL
             break
         # room for every grid point the next step may contain, and the final point
         if DENSE_OUTPUT and rows - row < 2.0 + max(0.0, min((n_out - kout) / every,
                                                              1.01 * h / (dt_out * every))):
-            status = 5
+            status = STATUS_BUFFER_FULL
             break
         if nacc + nrej >= max_steps:
-            status = 3
+            status = STATUS_MAX_STEPS
+            break
+        if nacc + nrej >= stop:
+            status = STATUS_PAUSED
             break
         if 0.1 * abs(h) <= abs(t) * 2.220446049250313e-16 or not h > 0.0:
-            status = 4
+            status = STATUS_STEP_TOO_SMALL
             break
         if t + 1.01 * h - t_end > 0.0:
             h = t_end - t
@@ -147,7 +156,7 @@ def integrate_adaptive(y_io, st, par, t_end, h0, hmax, rtol, atol, every, dt_out
         hnew = h / fac
         if err <= 1.0:
             y1, pst = project(y1, par)
-            if pst != 0:
+            if pst != STATUS_OK:
                 status = pst
                 break
             facold = max(err, 1.0e-4)
@@ -198,7 +207,8 @@ def integrate_adaptive(y_io, st, par, t_end, h0, hmax, rtol, atol, every, dt_out
                 nrej += 1
             last = False
             h = hnew
-    if status in (2, 3, 4) and nacc > st[8] and row < rows:
+    if status != STATUS_OK and status != STATUS_BUFFER_FULL and status != STATUS_PAUSED \
+            and nacc > st[8] and row < rows:
         record_row(out_t, out_y, out_c, row, t, y, nacc, nfev, 0.0, nrej)
         if with_h:
             out_c[row, 4] = 0.0                 # not a sample of every step: no step size

@@ -19,6 +19,11 @@ import math
 
 import numpy as np
 from gnibench.methods.kernels.free import (
+    STATUS_BUFFER_FULL,
+    STATUS_MAX_STEPS,
+    STATUS_OK,
+    STATUS_PAUSED,
+    STATUS_STEP_TOO_SMALL,
     N,
     f,
     post_step,
@@ -98,7 +103,7 @@ def step(y, h, par, ws):
     for j in range(1, K_FIXED + 1):
         nfev += gragg_column(y, fy, h, NJ[j - 1], par, ws, j - 1, False, 0.0, 0.0)
         neville(ws, j)
-    return to_tuple_shift(y, 1.0, to_tuple(ws[0])), nfev, 0.0, 0
+    return to_tuple_shift(y, 1.0, to_tuple(ws[0])), nfev, 0.0, STATUS_OK
 
 
 def column(j, y, fy, h, hmax, par, T, hh, w, rtol, atol, errold):
@@ -130,7 +135,7 @@ def column(j, y, fy, h, hmax, par, T, hh, w, rtol, atol, errold):
 
 
 def integrate_adaptive(y_io, st, par, t_end, h0, hmax, rtol, atol, every, dt_out, n_out, max_steps,
-                       out_t, out_y, out_c):
+                       budget, out_t, out_y, out_c):
     # dt_out, n_out: the dense-output grid of the embedded pairs' driver; odex has no dense output
     # here (its ``dt_out`` is always 0), the arguments keep one signature for every adaptive driver
     T = np.empty((KMAX, N))
@@ -155,17 +160,21 @@ def integrate_adaptive(y_io, st, par, t_end, h0, hmax, rtol, atol, every, dt_out
     t, h, k = st[0], st[1], int(st[2])
     reject = st[3] != 0.0
     nacc, nrej, nfev = int(st[4]), int(st[5]), st[6]
-    status = 0
+    status = STATUS_OK
+    stop = nacc + nrej + budget              # attempts in this call (STATUS_PAUSED after them)
     while True:
         if row >= rows:
-            status = 5
+            status = STATUS_BUFFER_FULL
             break
         if nacc + nrej >= max_steps:
-            status = 3
+            status = STATUS_MAX_STEPS
+            break
+        if nacc + nrej >= stop:
+            status = STATUS_PAUSED
             break
         h = min(h, hmax)
         if 0.1 * abs(h) <= abs(t) * 2.220446049250313e-16 or not h > 0.0:
-            status = 4
+            status = STATUS_STEP_TOO_SMALL
             break
         last = False
         if t + 1.01 * h - t_end > 0.0:
@@ -244,7 +253,7 @@ def integrate_adaptive(y_io, st, par, t_end, h0, hmax, rtol, atol, every, dt_out
             continue
         # accepted
         y1, pst = project(to_tuple_shift(y, 1.0, to_tuple(T[0])), par)
-        if pst != 0:
+        if pst != STATUS_OK:
             status = pst
             break
         nacc += 1
@@ -286,7 +295,8 @@ def integrate_adaptive(y_io, st, par, t_end, h0, hmax, rtol, atol, every, dt_out
             st[8] = nacc
         if last:
             break
-    if status in (2, 3, 4) and nacc > st[8] and row < rows:
+    if status != STATUS_OK and status != STATUS_BUFFER_FULL and status != STATUS_PAUSED \
+            and nacc > st[8] and row < rows:
         record_row(out_t, out_y, out_c, row, t, y, nacc, nfev, 0.0, nrej)
         row += 1
     store(y, y_io, 0)

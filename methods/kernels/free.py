@@ -19,3 +19,6 @@ step_stages = dense_from_stages = dense_eval = _unbound
 BETA = EXPO = FAC1 = FAC2 = SAFE = DENSE_NFEV = 0.0
 IORD = STAGES_NEW = 0
 FSAL = DENSE_OUTPUT = False
+# the kernel codes of gnibench.suite.foundation.status.Status (emitted by kernel_constants)
+STATUS_OK = STATUS_NONFINITE = STATUS_NEWTON_FAILED = STATUS_MAX_STEPS = STATUS_STEP_TOO_SMALL = 0
+STATUS_BUFFER_FULL = STATUS_PAUSED = 0

@@ -15,7 +15,15 @@ Free names bound in the generated module: D (degrees of freedom) and the generat
 from __future__ import annotations
 
 import numpy as np
-from gnibench.methods.kernels.free import NEWTON_MAXIT, N, _unbound, lu_solve, newton_done
+from gnibench.methods.kernels.free import (
+    NEWTON_MAXIT,
+    STATUS_NEWTON_FAILED,
+    STATUS_OK,
+    N,
+    _unbound,
+    lu_solve,
+    newton_done,
+)
 
 D = 0
 gf_split = gf_join = gf_vec = gf_predict = gf_momentum = gf_position = _unbound
@@ -39,22 +47,22 @@ def step(y, h, par, ws):
     prev = np.inf
     for it in range(NEWTON_MAXIT + 1):
         if it == NEWTON_MAXIT:
-            return y, nfev, njev, 2
+            return y, nfev, njev, STATUS_NEWTON_FAILED
         g = gf_momentum(q, gf_vec(P), h, par, M)
         nfev += 1.0
         njev += 1.0
         for i in range(D):
             r[i] = p[i] - g[i]
         if not lu_solve(M, r, D, piv):
-            return y, nfev, njev, 2
+            return y, nfev, njev, STATUS_NEWTON_FAILED
         dnorm = 0.0
         for i in range(D):
             P[i] += r[i]
             dnorm = max(dnorm, abs(r[i]))
         if not dnorm < np.inf:
-            return y, nfev, njev, 2
+            return y, nfev, njev, STATUS_NEWTON_FAILED
         if newton_done(dnorm, prev, scale):
             break
         prev = dnorm
     Pt = gf_vec(P)
-    return gf_join(gf_position(q, Pt, h, par), Pt), nfev + 1.0, njev, 0
+    return gf_join(gf_position(q, Pt, h, par), Pt), nfev + 1.0, njev, STATUS_OK

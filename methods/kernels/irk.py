@@ -9,6 +9,8 @@ from __future__ import annotations
 import numpy as np
 from gnibench.methods.kernels.free import (
     NEWTON_MAXIT,
+    STATUS_NEWTON_FAILED,
+    STATUS_OK,
     A,
     D,
     N,
@@ -40,7 +42,7 @@ def step(y, h, par, ws):
     prev = np.inf
     for it in range(NEWTON_MAXIT + 1):
         if it == NEWTON_MAXIT:
-            return y, nfev, njev, 2
+            return y, nfev, njev, STATUS_NEWTON_FAILED
         for j in range(S):
             Yj = shifted(y, Z, j)
             store(f(Yj, par), F, j)
@@ -62,14 +64,14 @@ def step(y, h, par, ws):
                     acc += A[a][j] * F[j, i]
                 r[a * N + i] = h * acc - Z[a, i]
         if not lu_solve(M, r, S * N, piv):
-            return y, nfev, njev, 2
+            return y, nfev, njev, STATUS_NEWTON_FAILED
         dnorm = 0.0
         for a in range(S):
             for i in range(N):
                 Z[a, i] += r[a * N + i]
                 dnorm = max(dnorm, abs(r[a * N + i]))
         if not dnorm < np.inf:
-            return y, nfev, njev, 2
+            return y, nfev, njev, STATUS_NEWTON_FAILED
         if newton_done(dnorm, prev, scale):
             break
         prev = dnorm
@@ -78,4 +80,4 @@ def step(y, h, par, ws):
         for j in range(S):
             acc += D[j] * Z[j, i]
         out[i] = y[i] + acc
-    return to_tuple(out), nfev, njev, 0
+    return to_tuple(out), nfev, njev, STATUS_OK

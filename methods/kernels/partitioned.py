@@ -13,6 +13,8 @@ from gnibench.methods.kernels.free import (
     NE,
     NEWTON_MAXIT,
     NI,
+    STATUS_NEWTON_FAILED,
+    STATUS_OK,
     N,
     f,
     fjac,
@@ -38,7 +40,7 @@ def step_X(y, h, par, ws):
     prev = np.inf
     for it in range(NEWTON_MAXIT + 1):
         if it == NEWTON_MAXIT:
-            return y, nfev, njev, 2
+            return y, nfev, njev, STATUS_NEWTON_FAILED
         Y = to_tuple(ya)
         g = f(Y, par)
         fjac(Y, par, J)
@@ -51,13 +53,13 @@ def step_X(y, h, par, ws):
                 M[k, m] = -h * J[i, I_IDX[m]]
             M[k, k] += 1.0
         if not lu_solve(M, r, NI, piv):
-            return y, nfev, njev, 2
+            return y, nfev, njev, STATUS_NEWTON_FAILED
         dnorm = 0.0
         for k in range(NI):
             ya[I_IDX[k]] += r[k]
             dnorm = max(dnorm, abs(r[k]))
         if not dnorm < np.inf:
-            return y, nfev, njev, 2
+            return y, nfev, njev, STATUS_NEWTON_FAILED
         if newton_done(dnorm, prev, scale):
             break
         prev = dnorm
@@ -66,4 +68,4 @@ def step_X(y, h, par, ws):
     for k in range(NE):
         i = E_IDX[k]
         ya[i] = y[i] + h * g[i]
-    return to_tuple(ya), nfev, njev, 0
+    return to_tuple(ya), nfev, njev, STATUS_OK

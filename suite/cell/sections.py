@@ -48,31 +48,26 @@ Gamma_k), the section coordinates, the remaining state components, and ``err_<in
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
 
 import numpy as np
+from gnibench.suite.cell.compiled import (
+    ADAPTIVE_STATE,
+    COUNTERS,
+    FIXED_STATE,
+    compile_cell,
+    dense_output_refusal,
+    problem_kernel,
+)
+from gnibench.suite.cell.grid import grid, grid_step
+from gnibench.suite.cell.trajectory import Trajectory
 from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.provenance import versions
+from gnibench.suite.foundation.status import Status
 
 CHUNK = 8192                  # steps per chunk of the compiled drivers
 HENON_RTOL = 1e-15            # agreement of m and 2m DOP853 substeps
 HENON_MAX_SUBSTEPS = 4096
 DENSE_MAXIT = 60              # Newton (or bisection) iterations on the continuous extension
-
-
-@dataclass
-class SectionResult:
-    problem: str
-    method: str
-    status: str
-    reason: str
-    section: str
-    columns: dict             # name -> 1-D array, in output order
-    meta: dict = field(default_factory=dict)
-
-    def frame(self):
-        import pandas as pd
-
-        return pd.DataFrame(self.columns)
 
 
 # -- the section's functions ------------------------------------------------------------------------
@@ -207,70 +202,60 @@ def dense_crossing(mod, par, y0, t0: float, h: float, y1_sample, t1: float, g, g
 
 # -- sample streams ---------------------------------------------------------------------------------
 
-def _fixed_chunks(cell, rec, h, nsteps, h_last):
-    """Yield (t, y, None, status, done) chunks of the compiled fixed-step driver, restarted per
-    chunk (no step sizes: the crossings of fixed-step cells are located by Hénon's trick)."""
-    y = np.array(cell.y0, dtype=np.float64)
-    k0 = 0
-    while k0 < nsteps:
-        m = min(CHUNK, nsteps - k0)
-        last = k0 + m == nsteps
-        hl = h_last if last else h
-        out_t, out_y, out_c = np.empty(m + 2), np.empty((m + 2, rec.dim)), np.zeros((m + 2, 4))
-        code, done, rows = cell.mod.integrate(y, cell.par, h, m, hl, 1, out_t, out_y, out_c)
-        k = k0 + out_c[:rows, 0]
-        t = np.where(k < nsteps, k * h, (nsteps - 1) * h + h_last)
-        yield t, out_y[:rows].copy(), None, int(code), k0 + int(done)
-        if int(code) != 0:
+def _fixed_chunks(cell, rec, h, nsteps, h_last, budget):
+    """Yield (t, y, None, status, done) chunks of the resumable fixed-step driver, a sample at
+    every step (no step sizes: the crossings of fixed-step cells are located by Hénon's trick)."""
+    y_io = np.array([cell.y0, np.zeros(rec.dim)], dtype=np.float64)
+    st = np.zeros(FIXED_STATE)
+    while True:
+        out_t, out_y, out_c = np.empty(CHUNK), np.empty((CHUNK, rec.dim)), np.zeros((CHUNK, COUNTERS))
+        code, rows = cell.kernel.integrate(y_io, st, cell.par, h, nsteps, h_last, 1, budget,
+                                           out_t, out_y, out_c)
+        status = Status.from_code(code)
+        more = status in (Status.BUFFER_FULL, Status.PAUSED)
+        yield (out_t[:rows].copy(), out_y[:rows].copy(), None, Status.OK if more else status,
+               int(st[0]), st[0] / nsteps)
+        if not more:
             return
-        y = out_y[rows - 1].copy()
-        k0 += m
 
 
-def _adaptive_chunks(cell, rec, v, t_end):
+def _adaptive_chunks(cell, rec, v, t_end, budget):
     """Yield (t, y, h, status, done) chunks of the resumable adaptive driver; h[i] is the size of
     the accepted step ending at sample i (the driver's 5th output column; 0 where unknown)."""
-    from gnibench.suite.cell.solve import ADAPTIVE_STATE
-
     y_io = np.array([cell.y0, np.zeros(rec.dim)], dtype=np.float64)
     st = np.zeros(ADAPTIVE_STATE)
     hmax = v["hmax"] if v["hmax"] > 0 else t_end
     while True:
-        cap = CHUNK
-        out_t, out_y, out_c = np.empty(cap), np.empty((cap, rec.dim)), np.zeros((cap, 5))
-        code, rows = cell.mod.integrate_adaptive(y_io, st, cell.par, t_end, v["h0"], hmax,
-                                                 v["rtol"], v["atol"], 1, 0.0, 0, v["max_steps"],
-                                                 out_t, out_y, out_c)
+        out_t, out_y, out_c = np.empty(CHUNK), np.empty((CHUNK, rec.dim)), np.zeros((CHUNK, COUNTERS))
+        code, rows = cell.kernel.integrate_adaptive(y_io, st, cell.par, t_end, v["h0"], hmax,
+                                                    v["rtol"], v["atol"], 1, 0.0, 0,
+                                                    v["max_steps"], budget, out_t, out_y, out_c)
+        status = Status.from_code(code)
+        more = status in (Status.BUFFER_FULL, Status.PAUSED)
         t, y, h = out_t[:rows].copy(), out_y[:rows].copy(), out_c[:rows, 4].copy()
-        yield t, y, h, (0 if code == 5 else int(code)), int(st[4])
-        if code != 5:
+        yield t, y, h, Status.OK if more else status, int(st[4]), st[0] / t_end
+        if not more:
             return
 
 
 # -- the command ------------------------------------------------------------------------------------
 
-def solve_section(problem_text: str, method_text: str, crossings: int, steps: int | None = None,
-                  t_end: float | None = None, locator: str | None = None) -> SectionResult:
-    """Integrate until ``crossings`` crossings of the problem's first section (or the horizon).
+def integrate_section(problem, method, crossings: int, steps: int | None = None,
+                      t_end: float | None = None, locator: str | None = None,
+                      progress=None, samples: Trajectory | None = None) -> Trajectory:
+    """Integrate until ``crossings`` crossings of the problem's first section (or the horizon);
+    the trajectory's samples are the located crossings (``kind = "section"``).
 
     ``locator``: None (dense output where it applies, else Hénon's trick), ``"henon"`` (always
     Hénon's trick, e.g. to compare the two) or ``"dense"`` (a UserError where it does not apply).
+    ``samples``: for external engines and transformed problems, their trajectory sampled at every
+    step (from the driver facade), scanned for crossings.
     """
-    from gnibench.suite.cell.solve import (
-        STATUS,
-        _compiled_cell,
-        dense_output_refusal,
-        grid,
-        grid_step,
-        prepare,
-        solve,
-    )
 
     if crossings < 1:
         raise UserError(f"bad --section {crossings}; allowed: an integer >= 1 (number of crossings)")
     if locator not in (None, "dense", "henon"):
         raise UserError(f"bad locator {locator!r}; allowed: dense, henon")
-    problem, method = prepare(problem_text, method_text)
     rec = problem.record
     sec, g, grad_g, cond, fns = section_of(rec)
     ppar = tuple(float(x) for x in rec.par(problem.values))
@@ -281,32 +266,31 @@ def solve_section(problem_text: str, method_text: str, crossings: int, steps: in
     adaptive = bool(method.base.values.get("adaptive"))
     t0 = time.perf_counter()
     dense_why = "external engine or transformed problem"
+    compile_seconds = 0.0
     if external or transformed:
-        res = solve(problem_text, method_text, steps=steps, t_end=t_end, every=1, reference="none")
-        stream = iter([(res.t, res.y, None, 0 if res.status == "ok" else -1, len(res.t) - 1)])
-        status_of = {0: "ok", -1: res.status}.get
+        res = samples
+        stream = iter([(res.t, res.y, None, res.status, len(res.t) - 1, 1.0)])
         reason0 = res.reason
+        compile_seconds = res.compile_seconds
 
         def F(y):
             return fns["base_f"](tuple(y), ppar)
 
         field_used = "base field of the problem"
     else:
-        cell = _compiled_cell(problem, method)
+        cell = compile_cell(problem, method)
+        compile_seconds = cell.compile_seconds
         dense_why = dense_output_refusal(problem, method)
         if locator == "henon":
             dense_why = "Hénon's trick asked for (locator='henon')"
         if adaptive:
             if t_end is None:
                 raise UserError(f"{method.base.id} with adaptive=true needs --t-end T (not --steps)")
-            stream = _adaptive_chunks(cell, rec, method.base.values, float(t_end))
+            stream = _adaptive_chunks(cell, rec, method.base.values, float(t_end), CHUNK)
         else:
-            stream = _fixed_chunks(cell, rec, h, nsteps, h_last)
-
-        def status_of(c):
-            return STATUS[int(c)]
+            stream = _fixed_chunks(cell, rec, h, nsteps, h_last, CHUNK)
         reason0 = ""
-        f_c, par_c = cell.mod.f, cell.par
+        f_c, par_c = cell.kernel.f, cell.par
 
         def F(y):
             return f_c(tuple(float(x) for x in y), par_c)
@@ -317,13 +301,11 @@ def solve_section(problem_text: str, method_text: str, crossings: int, steps: in
     if locator == "dense" and dense_why:
         raise UserError(f"dense output does not locate these crossings: {dense_why}")
     y0 = rec.y0(problem.values)
-    inv = fns["invariants"]
-    H0 = np.asarray(inv(tuple(y0), ppar), dtype=float)
 
     pts_t, pts_y, max_g, max_sub, max_it, fallbacks = [], [], 0.0, 0, 0, 0
     prev = None                                  # last sample of the previous chunk
-    status, t_last = "ok", 0.0
-    for t, Y, H, code, _ in stream:
+    status, t_last = Status.OK, 0.0
+    for t, Y, H, code, _, fraction in stream:
         if prev is not None and len(t) and t[0] == prev[0][0]:
             t, Y = t[1:], Y[1:]                  # the restart repeats the previous last sample
         if prev is not None:
@@ -336,7 +318,7 @@ def solve_section(problem_text: str, method_text: str, crossings: int, steps: in
         for n in crossing_intervals(gv):
             found = None
             if not dense_why:
-                found = (dense_crossing(cell.mod, cell.par, Y[n], float(t[n]), float(H[n + 1]),
+                found = (dense_crossing(cell.kernel, cell.par, Y[n], float(t[n]), float(H[n + 1]),
                                         Y[n + 1], float(t[n + 1]), g, grad_g, ppar)
                          if H[n + 1] > 0 else None)
                 fallbacks += found is None
@@ -354,39 +336,34 @@ def solve_section(problem_text: str, method_text: str, crossings: int, steps: in
             if len(pts_t) == crossings:
                 break
         t_last = float(t[-1])
-        if code != 0:
-            status = status_of(code)
+        if progress is not None:
+            progress(max(len(pts_t) / crossings, fraction))
+        if code is not Status.OK:
+            status = code
             break
         if len(pts_t) == crossings:
             break
         prev = (t[-1:], Y[-1:], None if H is None else H[-1:])
     wall = time.perf_counter() - t0
     reason = ""
-    if status != "ok":
+    if status is not Status.OK:
         reason = reason0 or f"the integration stopped ({status}) at t = {t_last:.17g}"
     elif len(pts_t) < crossings:
         reason = (f"only {len(pts_t)} of {crossings} crossings of {sec.name} before "
                   f"t = {t_last:.17g}; raise --t-end / --steps")
     Yc = np.array(pts_y, dtype=float).reshape(len(pts_y), rec.dim)
-    cols = {"crossing": np.arange(1, len(pts_t) + 1), "t": np.array(pts_t, dtype=float)}
+    chart = None
     if sec.chart is not None:
-        cols["chart"] = (np.asarray(sec.chart(Yc), dtype=np.int64) if len(Yc)
-                         else np.zeros(0, dtype=np.int64))
-    order = list(sec.coords) + [s for s in rec.state if s not in sec.coords]
-    for s in order:
-        cols[s] = Yc[:, rec.state.index(s)]
-    integral_names = _integral_names(rec)
-    errs = (np.array([inv(tuple(r), ppar) for r in Yc], dtype=float).reshape(len(Yc), -1) - H0
-            if len(Yc) else np.zeros((0, len(integral_names))))
-    for k, name in enumerate(integral_names):
-        cols[f"err_{name}"] = errs[:, k]
-    from gnibench.suite.cell.solve import versions
-
+        chart = (np.asarray(sec.chart(Yc), dtype=np.int64) if len(Yc)
+                 else np.zeros(0, dtype=np.int64))
+    pk = problem_kernel(problem)
+    rows = len(pts_t)
     meta = {"versions": versions(), "section": sec.name, "section_reference": sec.reference,
-            "crossings_requested": crossings, "crossings_found": len(pts_t),
-            "max_abs_g": max_g, "locator": "henon" if dense_why else "dense",
-            "wall_seconds": wall, "h": h, "nsteps": nsteps, "t_last_sample": t_last,
-            "y0": list(y0), "H0": H0.tolist(), "design": "suite/sections.py"}
+            "section_coords": list(sec.coords), "crossings_requested": crossings,
+            "crossings_found": rows, "max_abs_g": max_g, "locator": "henon" if dense_why else "dense",
+            "wall_seconds": wall, "compile_seconds": compile_seconds, "h": h, "nsteps": nsteps,
+            "t_last_sample": t_last, "y0": list(y0), "H0": list(pk.at(y0)),
+            "design": "suite/cell/sections.py"}
     if dense_why:
         meta["locator_note"] = f"no dense output: {dense_why}"
     else:
@@ -397,11 +374,10 @@ def solve_section(problem_text: str, method_text: str, crossings: int, steps: in
     if dense_why or fallbacks:
         meta["henon"] = {"integrator": "DOP853, m equal substeps in g", "max_substeps": max_sub,
                          "rtol": HENON_RTOL, "field": field_used}
-    return SectionResult(problem=problem.text(), method=method.text(), status=status,
-                         reason=reason, section=sec.name, columns=cols, meta=meta)
-
-
-def _integral_names(rec) -> tuple[str, ...]:
-    from gnibench.problems.codegen import problem_meta
-
-    return tuple(problem_meta(rec)["integrals"])
+    nan = np.full(rows, np.nan)
+    return Trajectory(
+        problem=problem.text(), method=method.text(), state_names=rec.state,
+        t=np.array(pts_t, dtype=float), y=Yc, steps=np.zeros(rows, dtype=np.int64), nfev=nan,
+        njev=nan.copy(), rejected=nan.copy(), integral_names=pk.integral_names,
+        integrals=pk.integrals(Yc), H0=pk.at(y0), y0=tuple(y0), status=status, reason=reason,
+        kind="section", chart=chart, provenance=meta)

@@ -103,3 +103,11 @@ def parse_method(text: str, problem: Bound | None = None) -> MethodConfig:
 def canonical(problem: Bound, method: MethodConfig) -> tuple[str, str]:
     """The canonical texts of a cell's problem and method."""
     return problem.text(), method.text()
+
+
+def prepare(problem_text: str, method_text: str) -> tuple[Bound, MethodConfig]:
+    """Parse and validate a cell's specs (raises UserError on bad input); a transformed problem's
+    method is checked against the system it integrates."""
+    problem = parse_problem(problem_text)
+    target = problem.record.transformed(problem.values) or problem
+    return problem, parse_method(method_text, target)

@@ -1,4 +1,4 @@
-"""``gnibench list``: generated from the problem, method and modifier records."""
+"""``gnibench list``: generated from the problem, method, modifier and metric records."""
 from __future__ import annotations
 
 
@@ -7,6 +7,10 @@ def listing(what: str) -> list[dict]:
         from gnibench.problems import REGISTRY
 
         return [p.describe() for p in REGISTRY.values()]
+    if what == "metrics":
+        from gnibench.suite.metrics import METRICS
+
+        return [m.describe() for m in METRICS.values()]
     from gnibench.methods import METHODS, MODIFIERS
 
     return [m.describe() for m in METHODS.values()] + [m.describe() for m in MODIFIERS.values()]
@@ -27,6 +31,19 @@ def _params(params: list[dict]) -> str:
 
 def as_table(what: str, rows: list[dict]) -> str:
     out = []
+    if what == "metrics":
+        for r in rows:
+            flags = ["default"] if r["default"] else []
+            flags += [f"needs {n}" for n in r["needs"]]
+            out.append(f"{r['id']}  {r['title']}  [{', '.join(flags)}]  {r['reference']}")
+            out.append(f"    {r['doc']}")
+            if r["params"]:
+                out.append(f"    options: {_params(r['params'])}")
+            for kind in ("columns", "scalars"):
+                if r[kind]:
+                    where = "per sample" if kind == "columns" else "per cell"
+                    out.append(f"    {where}: " + "; ".join(f"{k} = {v}" for k, v in r[kind].items()))
+        return "\n".join(out)
     if what == "problems":
         for r in rows:
             out.append(f"{r['id']}  {r['title']}  {r['reference']}")

@@ -34,12 +34,15 @@ def _parser() -> argparse.ArgumentParser:
                    help="what global_error is measured against: exact | heyoka[:precision=double|"
                         "long double|real128,tol=T] | rebound[:tol=T] (IAS15) | none "
                         "(default: exact when the problem has one, else none)")
+    s.add_argument("--metrics", metavar="M,...",
+                   help="metrics beside the defaults (err_<I>, global_error), e.g. "
+                        "eta,precession,growth:of=H (see `gnibench list metrics`)")
     s.add_argument("--section", type=int, metavar="K",
                    help="integrate until K crossings of the problem's Poincaré section (within "
-                        "--t-end / --steps) and write the section points (suite/sections.py)")
+                        "--t-end / --steps) and write the section points (suite/cell/sections.py)")
 
-    ls = sub.add_parser("list", help="list problems or methods")
-    ls.add_argument("what", choices=("problems", "methods"))
+    ls = sub.add_parser("list", help="list problems, methods or metrics")
+    ls.add_argument("what", choices=("problems", "methods", "metrics"))
     ls.add_argument("--format", choices=("table", "json"), default="table")
 
     r = sub.add_parser("run", help="run an experiment (TOML file or shipped name)")
@@ -55,34 +58,28 @@ def _parser() -> argparse.ArgumentParser:
 
 def _solve(a) -> int:
     from gnibench.suite.cell.solve import solve
+    from gnibench.suite.metrics.compute import apply, parse_metrics
     from gnibench.suite.runs.storage import write_result
 
     if a.format == "parquet" and a.output is None:
         raise UserError("--format parquet needs -o FILE (binary output is not written to stdout)")
     if a.output is not None and not a.output.parent.exists():
         raise UserError(f"bad -o {a.output}: directory {a.output.parent} does not exist")
+    choices = parse_metrics(a.metrics or "")
     if a.section is not None:
-        return _solve_section(a)
-    result = solve(a.problem, a.method, steps=a.steps, t_end=a.t_end, every=a.every,
-                   reference=a.reference)
-    write_result(result, a.format, a.output, sys.stdout)
-    if result.status != "ok":
-        print(f"gnibench: {result.status}: {result.reason}", file=sys.stderr)
-    return 0
-
-
-def _solve_section(a) -> int:
-    from gnibench.suite.cell.sections import solve_section
-    from gnibench.suite.runs.storage import write_sections
-
-    if a.every != 1:
-        raise UserError("--every does not apply with --section (the section points are written)")
-    if a.reference is not None:
-        raise UserError("--reference does not apply with --section (no global error is written)")
-    result = solve_section(a.problem, a.method, a.section, steps=a.steps, t_end=a.t_end)
-    write_sections(result, a.format, a.output, sys.stdout)
-    if result.reason:
-        print(f"gnibench: {result.status}: {result.reason}", file=sys.stderr)
+        if a.every != 1:
+            raise UserError("--every does not apply with --section (the section points are written)")
+        if a.reference is not None:
+            raise UserError("--reference does not apply with --section (no global error is "
+                            "written)")
+    traj = solve(a.problem, a.method, steps=a.steps, t_end=a.t_end, every=a.every,
+                 reference=a.reference, section=a.section)
+    metrics, skipped = apply(traj, choices)
+    write_result(traj, metrics, a.format, a.output, sys.stdout)
+    for name, why in skipped.items():
+        print(f"gnibench: metric {name} does not apply: {why}", file=sys.stderr)
+    if traj.reason:
+        print(f"gnibench: {traj.status}: {traj.reason}", file=sys.stderr)
     return 0
 
 

@@ -1,0 +1,12 @@
+"""The metric registry: one line per metric. A new metric is one file plus one line here.
+
+See :mod:`gnibench.suite.metrics.base` for the record, and :mod:`gnibench.suite.metrics.compute`
+for how metrics are chosen and applied.
+"""
+from gnibench.suite.metrics import global_error, invariants
+
+METRICS = {m.id: m for m in (
+    invariants.invariant_error,
+    invariants.relative_invariant_error,
+    global_error.global_error,
+)}

@@ -29,6 +29,8 @@ from importlib import resources
 from pathlib import Path
 
 import numpy as np
+from gnibench.suite.cell.driver import UNLIMITED, integrate
+from gnibench.suite.cell.spec import prepare
 
 PROBLEM = "kepler-2d"
 H = 2 * math.pi / 1000
@@ -39,41 +41,32 @@ C_REFERENCE_NS = {"rk4": 29.0, "sv": 14.0}  # the issue's C numbers on the refer
 
 
 def compiled_cell(method: str, problem: str = PROBLEM, h: float = H):
-    """(integrate, y0, par) of a warmed-up cell without modifiers; compile time excluded."""
-    from gnibench.suite.cell.codegen import load
-    from gnibench.suite.cell.solve import prepare
-
+    """(problem, method) of a warmed-up cell without modifiers, parsed once; compile time excluded
+    (the driver facade keeps the compiled cell of this process)."""
     bound, cfg = prepare(problem, f"{method}:h={h!r}")
     if cfg.modifiers:
         raise ValueError("bench cells take no modifiers")
-    mod, _, _ = load(bound, cfg)
-    rec = bound.record
-    y0 = np.array(rec.y0(bound.values), dtype=np.float64)
-    par = np.array(rec.par(bound.values), dtype=np.float64)
-    scratch = (np.empty(3), np.empty((3, rec.dim)), np.empty((3, 3)))
-    mod.integrate(y0, par, h, 1, h, 1, *scratch)  # warm-up: loads or compiles every function
-    return mod.integrate, y0, par
+    integrate(bound, cfg, steps=1, budget=None)         # warm-up: loads or compiles every function
+    return bound, cfg
 
 
-def run_steps(integrate, y0, par, steps: int, h: float = H):
-    """One timed call of ``steps`` steps, sampled only at the end: (seconds, final state)."""
-    out_t, out_y, out_c = np.empty(3), np.empty((3, y0.size)), np.empty((3, 3))
-    t0 = time.perf_counter()
-    status, done, rows = integrate(y0, par, h, steps, h, steps, out_t, out_y, out_c)
-    dt = time.perf_counter() - t0
-    if status != 0 or done != steps:
-        raise RuntimeError(f"bench run stopped early: status {status} after {done} steps")
-    return dt, out_y[rows - 1].copy()
+def run_steps(bound, cfg, steps: int):
+    """One timed integration of ``steps`` steps through the driver facade in a single call of the
+    compiled driver, sampled only at the end: (seconds inside the compiled call, final state)."""
+    traj = integrate(bound, cfg, steps=steps, every=steps, budget=None)
+    if traj.status != "ok" or traj.steps[-1] != steps:
+        raise RuntimeError(f"bench run stopped early: {traj.status} after {traj.steps[-1]} steps")
+    return traj.wall_seconds, traj.y[-1].copy()
 
 
 def time_numba(method: str, steps: int, repeats: int = REPEATS):
     """(min ns/step, median ns/step, final state) of the compiled kernel."""
-    integrate, y0, par = compiled_cell(method)
+    bound, cfg = compiled_cell(method)
     ts, y = [], None
     for _ in range(repeats):
-        dt, y = run_steps(integrate, y0, par, steps)
+        dt, y = run_steps(bound, cfg, steps)
         ts.append(dt * 1e9 / steps)
-    return min(ts), statistics.median(ts), y, y0
+    return min(ts), statistics.median(ts), y, np.array(bound.record.y0(bound.values))
 
 
 def build_c(tmp: Path) -> Path | None:
@@ -178,42 +171,32 @@ ADAPTIVE_CELLS = (("dopri5", "RK45"), ("dop853", "DOP853"))  # (gnibench method,
 
 
 def adaptive_cell(method: str, tol: float = ADAPTIVE_TOL, problem: str = PROBLEM):
-    """(integrate_adaptive, y0, par, Pair) of a warmed-up adaptive cell; compile time excluded."""
-    from gnibench.suite.cell.codegen import load
-    from gnibench.suite.cell.solve import prepare
-
+    """(problem, method, Pair) of a warmed-up adaptive cell, parsed once; compile time excluded."""
     bound, cfg = prepare(problem, f"{method}:adaptive=true,rtol={tol!r},atol={tol!r}")
-    mod, _, _ = load(bound, cfg)
-    rec = bound.record
-    y0 = np.array(rec.y0(bound.values), dtype=np.float64)
-    par = np.array(rec.par(bound.values), dtype=np.float64)
-    run_adaptive(mod.integrate_adaptive, y0, par, 1.0, tol)      # warm-up
-    return mod.integrate_adaptive, y0, par, cfg.base.record.data
+    run_adaptive(bound, cfg, 1.0)      # warm-up
+    return bound, cfg, cfg.base.record.data
 
 
-def run_adaptive(integrate_adaptive, y0, par, t_end: float, tol: float = ADAPTIVE_TOL):
-    """One timed adaptive integration to t_end, sampled only at the end (h0 = 0: HINIT, hmax =
-    t_end): (seconds, accepted, rejected, nfev, final state)."""
-    y_io = np.array([y0, np.zeros_like(y0)])
-    st = np.zeros(10)
-    out_t, out_y, out_c = np.empty(4), np.empty((4, y0.size)), np.zeros((4, 4))
-    t0 = time.perf_counter()
-    status, rows = integrate_adaptive(y_io, st, par, t_end, 0.0, t_end, tol, tol, 1 << 60, 0.0, 0,
-                                      1 << 60, out_t, out_y, out_c)
-    dt = time.perf_counter() - t0
-    if status != 0:
-        raise RuntimeError(f"adaptive bench run stopped: status {status}")
-    return dt, int(st[4]), int(st[5]), float(st[6]), out_y[rows - 1].copy()
+def run_adaptive(bound, cfg, t_end: float):
+    """One timed adaptive integration to t_end through the driver facade (h0 = 0: HINIT,
+    hmax = t_end), sampled only at the end: (seconds inside the compiled call, accepted,
+    rejected, nfev, final state)."""
+    traj = integrate(bound, cfg, t_end=t_end, every=UNLIMITED, budget=None)
+    if traj.status != "ok":
+        raise RuntimeError(f"adaptive bench run stopped: {traj.status}")
+    return (traj.wall_seconds, int(traj.steps[-1]), int(traj.rejected[-1]), float(traj.nfev[-1]),
+            traj.y[-1].copy())
 
 
 def time_numba_adaptive(method: str, periods: int = ADAPTIVE_PERIODS,
                         repeats: int = ADAPTIVE_REPEATS,
                         tol: float = ADAPTIVE_TOL) -> dict:
-    integrate_adaptive, y0, par, pair = adaptive_cell(method, tol)
+    bound, cfg, pair = adaptive_cell(method, tol)
+    y0 = np.array(bound.record.y0(bound.values))
     t_end = periods * 2 * math.pi
     ts = []
     for _ in range(repeats):
-        dt, nacc, nrej, nfev, y = run_adaptive(integrate_adaptive, y0, par, t_end, tol)
+        dt, nacc, nrej, nfev, y = run_adaptive(bound, cfg, t_end)
         ts.append(dt * 1e6 / (nacc + nrej))
     return {"us_min": min(ts), "us_median": statistics.median(ts), "accepted": nacc,
             "rejected": nrej, "nfev": nfev, "y": y, "y0": y0, "pair": pair}

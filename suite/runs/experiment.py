@@ -68,6 +68,7 @@ class Cell:
     every: int
     nsteps: int
     t_final: float
+    metrics: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -240,7 +241,8 @@ def with_options(spec: str, target: str, options: dict[str, str]) -> str:
 
 
 def _expand(group: dict, gi: int, defaults: dict, where: str, first_id: int) -> list[Cell]:
-    from gnibench.suite.cell.solve import grid, grid_step, prepare
+    from gnibench.suite.cell.grid import grid, grid_step
+    from gnibench.suite.cell.spec import prepare
 
     _keys(group, GROUP_KEYS, where)
     label = _text(group, "label", where)

@@ -50,24 +50,29 @@ class CellOutcome:
     samples: object = None          # pandas DataFrame, None for a cell in error
     row: dict = field(default_factory=dict)
     timing: dict = field(default_factory=dict)
+    state_names: tuple[str, ...] = ()
 
 
 def run_cell(cell: Cell) -> CellOutcome:
-    """Solve one cell and build its rows; an unexpected exception becomes status ``error``."""
+    """Solve one cell, measure it and build its rows; an unexpected exception becomes status
+    ``error``."""
     from gnibench.suite.cell.solve import solve
+    from gnibench.suite.metrics.compute import apply, parse_metrics
     from gnibench.suite.runs.tables import cell_row, cell_samples, timing_row
 
     try:
         with np.errstate(all="ignore"):     # overflow in a diverging cell is a status, not noise
-            result = solve(cell.problem_spec, cell.method_spec, steps=cell.steps,
-                           t_end=cell.t_end, every=cell.every)
-            samples = cell_samples(cell, result)
-            row = cell_row(cell, result)
+            traj = solve(cell.problem_spec, cell.method_spec, steps=cell.steps,
+                         t_end=cell.t_end, every=cell.every)
+            metrics, _ = apply(traj, parse_metrics(cell.metrics))
+            samples = cell_samples(cell, traj, metrics)
+            row = cell_row(cell, traj, metrics)
     except Exception as e:  # noqa: BLE001 - any failure of one cell is recorded, the run goes on
         reason = f"{type(e).__name__}: {e}".replace("\n", " ")
-        return CellOutcome(cell, "error", reason, None, cell_row(cell, None, "error", reason),
+        return CellOutcome(cell, "error", reason, None, cell_row(cell, None, None, "error", reason),
                            timing_row(cell, None, "error"))
-    return CellOutcome(cell, result.status, result.reason, samples, row, timing_row(cell, result))
+    return CellOutcome(cell, str(traj.status), traj.reason, samples, row, timing_row(cell, traj),
+                       traj.state_names)
 
 
 def serial(fn: Callable[[Cell], CellOutcome], cells: Iterable[Cell]) -> Iterator[CellOutcome]:
@@ -148,7 +153,7 @@ class _Writer:
         t0 = time.perf_counter()
         cells = self.experiment.cells
         done = [self.done[c.id] for c in cells if c.id in self.done]
-        samples = samples_table([o.samples for o in done if o.samples is not None])
+        samples = samples_table([(o.samples, o.state_names) for o in done if o.samples is not None])
         rows = [self.done[c.id].row if c.id in self.done else cell_row(c) for c in cells]
         timings = [self.done[c.id].timing if c.id in self.done else timing_row(c) for c in cells]
         meta = self.provenance(len(done))
@@ -164,7 +169,7 @@ class _Writer:
         self.write_cost = self.last_write - t0
 
     def provenance(self, ndone: int) -> dict:
-        from gnibench.suite.cell.solve import versions
+        from gnibench.suite.foundation.provenance import versions
 
         e = self.experiment
         return {"experiment": e.name, "title": e.title, "reference": e.reference,

@@ -12,33 +12,26 @@ from pathlib import Path
 from gnibench.suite.foundation.cache import atomic_write
 
 
-def trajectory_frame(result):
-    """The public table of one cell: t, states, err_<integral>, global_error, steps, nfev."""
-    import pandas as pd
-
-    cols = {"t": result.t}
-    for i, name in enumerate(result.state_names):
-        cols[name] = result.y[:, i]
-    for k, name in enumerate(result.integral_names):
-        cols[f"err_{name}"] = result.invariant_errors[:, k]
-    if result.global_error is not None:
-        cols["global_error"] = result.global_error
-    cols["steps"] = result.steps
-    cols["nfev"] = result.nfev
-    return pd.DataFrame(cols)
-
-
-def provenance(result) -> dict:
-    return {"problem": result.problem, "method": result.method, "status": result.status,
-            "reason": result.reason, "wall_seconds": result.wall_seconds,
-            "compile_seconds": result.compile_seconds, "numba_cache_misses": result.cache_misses,
-            "h": result.h, "y0": list(result.y0), "njev": float(result.njev[-1]),
-            **result.meta}
+def provenance(traj, metrics=None) -> dict:
+    """The metadata written with one cell's table: specs, status, cost, provenance, and the
+    per-cell metric values (``metrics``: a MetricOutput, or None)."""
+    meta = {"problem": traj.problem, "method": traj.method, "kind": traj.kind,
+            "status": str(traj.status), "reason": traj.reason,
+            "njev": float(traj.njev[-1]) if len(traj.njev) else 0.0, **traj.provenance}
+    if traj.reference is not None:
+        meta["reference"] = traj.reference.describe
+    else:
+        meta.setdefault("reference", {"backend": None})
+    if metrics is not None:
+        meta["metrics"] = {k: _clean(v) for k, v in metrics.scalars.items()}
+    return meta
 
 
 def _clean(x):
     if isinstance(x, float) and not math.isfinite(x):
         return None
+    if hasattr(x, "item"):                    # numpy scalars
+        return _clean(x.item())
     return x
 
 
@@ -60,9 +53,12 @@ def read_parquet_meta(path: Path) -> dict:
     return json.loads(md.get(b"gnibench", b"{}"))
 
 
-def write_result(result, fmt: str, out: Path | None, stdout) -> None:
-    """Write one cell's trajectory in csv, json or parquet, to a file or stdout."""
-    write_frame(trajectory_frame(result), provenance(result), fmt, out, stdout)
+def write_result(traj, metrics, fmt: str, out: Path | None, stdout) -> None:
+    """Write one cell's table (samples or section crossings) in csv, json or parquet, to a file
+    or stdout; ``metrics`` is its MetricOutput (per-sample columns, per-cell values in meta)."""
+    from gnibench.suite.runs.tables import sample_frame
+
+    write_frame(sample_frame(traj, metrics), provenance(traj, metrics), fmt, out, stdout)
 
 
 def write_frame(df, meta: dict, fmt: str, out: Path | None, stdout) -> None:
@@ -82,10 +78,3 @@ def write_frame(df, meta: dict, fmt: str, out: Path | None, stdout) -> None:
             atomic_write(out, lambda p: Path(p).write_text(text + "\n"))
     else:
         write_parquet(df, out, meta)
-
-
-def write_sections(result, fmt: str, out, stdout=None) -> None:
-    """Write the section points in csv, json or parquet (provenance as in gnibench.suite.runs.storage)."""
-    meta = {"problem": result.problem, "method": result.method, "status": result.status,
-            "reason": result.reason, **result.meta}
-    write_frame(result.frame(), meta, fmt, out, stdout)

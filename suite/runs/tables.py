@@ -1,24 +1,62 @@
-"""The three tables of an experiment run, built from cells and their results.
+"""Tables from trajectories and their metric outputs: the one-cell table of ``gnibench solve`` and
+the three tables of an experiment run.
 
 ``samples`` (one row per cell and sample), ``cells`` (one row per cell) and ``timings`` (one row per
 cell). Only ``timings`` holds wall-clock numbers, so ``samples`` and ``cells`` are bit-identical
 between two runs of the same experiment on the same machine. The column contract is in
-``suite/experiments/README.md``.
+``suite/experiments/README.md`` and the README ("``gnibench solve`` output").
 """
 from __future__ import annotations
 
 import numpy as np
 import pandas as pd
-from gnibench.suite.runs.storage import trajectory_frame
+from gnibench.suite.foundation.status import TABLE_STATUSES
 
 SAMPLE_FRONT = ("cell", "problem", "method", "t", "steps", "nfev")
-STATUSES = ("ok", "nonfinite", "newton_failed", "error", "pending")
+STATUSES = TABLE_STATUSES
 
 
-def cell_samples(cell, result) -> pd.DataFrame:
-    """The samples of one cell: its ``gnibench solve`` table plus the cell id and specs."""
-    df = trajectory_frame(result)
-    clash = set(result.state_names) & set(SAMPLE_FRONT + ("global_error",))
+def sample_frame(traj, metrics) -> pd.DataFrame:
+    """The table of one cell: its samples and the per-sample metric columns.
+
+    Samples: ``t``, the states, ``err_<I>``, ``global_error``, ``steps``, ``nfev``, then the
+    columns of the chosen metrics. Section crossings: ``crossing``, ``t``, ``chart`` (multi-chart
+    sections), the section's coordinates, the other states, ``err_<I>``, then the chosen metrics.
+    """
+    cols = dict(metrics.columns)
+    errors = {k: cols.pop(k) for k in list(cols) if k.startswith("err_")}
+    out: dict[str, np.ndarray] = {}
+    if traj.kind == "section":
+        out["crossing"] = np.arange(1, len(traj.t) + 1)
+        out["t"] = traj.t
+        if traj.chart is not None:
+            out["chart"] = traj.chart
+        coords = list(traj.provenance.get("section_coords", ()))
+        order = coords + [s for s in traj.state_names if s not in coords]
+        for s in order:
+            out[s] = traj.y[:, traj.state_names.index(s)]
+        out.update(errors)
+    else:
+        out["t"] = traj.t
+        for i, name in enumerate(traj.state_names):
+            out[name] = traj.y[:, i]
+        out.update(errors)
+        if "global_error" in cols:
+            out["global_error"] = cols.pop("global_error")
+        out["steps"] = traj.steps
+        out["nfev"] = traj.nfev
+    clash = set(out) & set(cols)
+    if clash:
+        raise ValueError(f"metric columns {sorted(clash)} clash with the sample columns")
+    out.update(cols)
+    return pd.DataFrame(out)
+
+
+def cell_samples(cell, traj, metrics) -> pd.DataFrame:
+    """The samples of one cell of an experiment: its ``gnibench solve`` table plus the cell id
+    and specs."""
+    df = sample_frame(traj, metrics)
+    clash = set(traj.state_names) & set(SAMPLE_FRONT + ("global_error",))
     if clash:
         raise ValueError(f"state names {sorted(clash)} clash with the fixed sample columns")
     df.insert(0, "cell", np.int64(cell.id))
@@ -27,70 +65,75 @@ def cell_samples(cell, result) -> pd.DataFrame:
     return df
 
 
-def _max_abs(values: np.ndarray) -> float:
-    """max |x|, where NaN counts as infinite (a diverged cell must not look accurate)."""
-    a = np.abs(values)
-    return float(np.max(np.where(np.isnan(a), np.inf, a))) if a.size else float("nan")
-
-
-def cell_row(cell, result=None, status: str = "pending", reason: str = "") -> dict:
-    """The summary row of one cell; without a result, the row of a cell that did not finish."""
+def cell_row(cell, traj=None, metrics=None, status: str = "pending", reason: str = "") -> dict:
+    """The summary row of one cell; without a trajectory, the row of a cell that did not finish."""
     row = {"cell": cell.id, "group": cell.group, "label": cell.label, "problem": cell.problem,
            "method": cell.method, "h": cell.h,
            "t_end": np.nan if cell.t_end is None else cell.t_end,
            "steps_planned": cell.nsteps, "every": cell.every, "status": status, "reason": reason,
            "steps": None, "t_final": np.nan, "nfev": np.nan, "njev": np.nan, "samples": None,
            "integrals": "", "final_global_error": np.nan, "max_global_error": np.nan}
-    if result is None:
+    if traj is None:
         return row
-    row.update(status=result.status, reason=result.reason, steps=int(result.steps[-1]),
-               t_final=float(result.t[-1]), nfev=float(result.nfev[-1]),
-               njev=float(result.njev[-1]), samples=len(result.t),
-               integrals="/".join(result.integral_names))
-    for k, name in enumerate(result.integral_names):
-        row[f"max_abs_err_{name}"] = _max_abs(result.invariant_errors[:, k])
-    if result.global_error is not None:
-        g = result.global_error
-        row["final_global_error"] = float(g[-1])
-        row["max_global_error"] = _max_abs(g)
+    last = len(traj.t) - 1
+    row.update(status=str(traj.status), reason=traj.reason,
+               steps=int(traj.steps[last]) if last >= 0 else 0,
+               t_final=float(traj.t[last]) if last >= 0 else np.nan,
+               nfev=float(traj.nfev[last]) if last >= 0 else np.nan,
+               njev=float(traj.njev[last]) if last >= 0 else np.nan, samples=len(traj.t),
+               integrals="/".join(traj.integral_names))
+    if metrics is not None:
+        row.update(metrics.scalars)
     return row
 
 
-def timing_row(cell, result=None, status: str = "pending") -> dict:
+def timing_row(cell, traj=None, status: str = "pending") -> dict:
     row = {"cell": cell.id, "problem": cell.problem, "method": cell.method, "status": status,
            "wall_seconds": np.nan, "compile_seconds": np.nan, "cache_misses": None}
-    if result is not None:
-        row.update(status=result.status, wall_seconds=result.wall_seconds,
-                   compile_seconds=result.compile_seconds, cache_misses=result.cache_misses)
+    if traj is not None:
+        row.update(status=str(traj.status), wall_seconds=traj.wall_seconds,
+                   compile_seconds=traj.compile_seconds,
+                   cache_misses=traj.provenance.get("numba_cache_misses"))
     return row
 
 
-def samples_table(frames: list[pd.DataFrame]) -> pd.DataFrame:
-    """Concatenate cell samples in cell order: fixed columns, states, err_*, global_error.
+def samples_table(parts: list[tuple[pd.DataFrame, tuple[str, ...]]]) -> pd.DataFrame:
+    """Concatenate cell samples in cell order: fixed columns, states, err_*, global_error, then
+    the other metric columns. ``parts`` are (samples of a cell, its problem's state names).
 
     States and integrals are the union over the cells, in order of first appearance; a column a
     cell's problem lacks is NaN in that cell's rows.
     """
-    frames = sorted(frames, key=lambda f: int(f["cell"].iloc[0]) if len(f) else -1)
-    if not frames:
+    parts = sorted(parts, key=lambda p: int(p[0]["cell"].iloc[0]) if len(p[0]) else -1)
+    if not parts:
         return pd.DataFrame({c: pd.Series(dtype=t) for c, t in zip(
             SAMPLE_FRONT, ("int64", "object", "object", "float64", "int64", "float64"))})
-    df = pd.concat(frames, ignore_index=True)
-    rest = [c for c in df.columns if c not in SAMPLE_FRONT and c != "global_error"]
-    states = [c for c in rest if not c.startswith("err_")]
-    errors = [c for c in rest if c.startswith("err_")]
+    df = pd.concat([f for f, _ in parts], ignore_index=True)
+    states: list[str] = []
+    for _, names in parts:
+        states += [s for s in names if s not in states]
+    errors = [c for c in df.columns if c.startswith("err_")]
     tail = ["global_error"] if "global_error" in df.columns else []
-    return df[list(SAMPLE_FRONT) + states + errors + tail]
+    rest = [c for c in df.columns if c not in SAMPLE_FRONT and c not in states
+            and c not in errors and c not in tail]
+    return df[list(SAMPLE_FRONT) + states + errors + tail + rest]
+
+
+_CELL_COLUMNS = ("cell", "group", "label", "problem", "method", "h", "t_end", "steps_planned",
+                 "every", "status", "reason", "steps", "t_final", "nfev", "njev", "samples",
+                 "integrals")
 
 
 def cells_table(rows: list[dict]) -> pd.DataFrame:
+    """One row per cell: the fixed columns, max_abs_err_<I>, the global errors, then the other
+    per-cell metric values."""
     df = pd.DataFrame(sorted(rows, key=lambda r: r["cell"]))
     for col in ("steps", "samples"):
         df[col] = df[col].astype("Int64")
     errs = [c for c in df.columns if c.startswith("max_abs_err_")]
-    front = [c for c in df.columns if not c.startswith("max_abs_err_")
-             and c not in ("final_global_error", "max_global_error")]
-    return df[front + errs + ["final_global_error", "max_global_error"]]
+    glob = ["final_global_error", "max_global_error"]
+    extra = [c for c in df.columns if c not in _CELL_COLUMNS and c not in errs and c not in glob]
+    return df[list(_CELL_COLUMNS) + errs + glob + extra]
 
 
 def timings_table(rows: list[dict]) -> pd.DataFrame:

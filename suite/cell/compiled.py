@@ -1,0 +1,147 @@
+"""A cell's compiled kernels, loaded and warmed up: what the driver facade calls.
+
+:func:`compile_cell` loads (or generates and compiles) the cell's module and its problem's module
+(:mod:`gnibench.suite.cell.codegen`), builds the run-time parameters ``par`` (the problem's model
+parameters, then each modifier's numbers: H0 and gains, [B] (2.5)-(2.6), (2.10)) and runs one step
+of the driver the cell will use, so that compiling or loading from numba's disk cache is timed
+apart from the integration.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, replace
+from types import ModuleType
+
+import numpy as np
+from gnibench.suite.cell.codegen import load, load_problem
+from gnibench.suite.foundation.params import Bound
+
+#: length of ``st``, the resumable state of the adaptive drivers (methods/kernels/adaptive.py)
+ADAPTIVE_STATE = 10
+#: length of ``st``, the resumable state of the fixed-step driver (methods/kernels/driver.py)
+FIXED_STATE = 5
+#: counter columns of the output buffer: steps, nfev, njev, rejected, size of the last step
+COUNTERS = 5
+
+
+@dataclass
+class CompiledCell:
+    """The compiled parts of one cell and the numbers they run with.
+
+    ``kernel`` is the cell's generated module (field with modifiers, method step, drivers);
+    ``problem_kernel`` the problem's own (integrals, ``eval_invariants``, section functions).
+    """
+
+    kernel: ModuleType
+    problem_kernel: ModuleType
+    integral_names: tuple[str, ...]
+    problem_par: np.ndarray
+    par: np.ndarray
+    y0: tuple[float, ...]
+    H0: tuple[float, ...]
+    compile_seconds: float
+
+    @property
+    def cache_misses(self) -> int:
+        """Functions compiled in this process instead of loaded from numba's disk cache."""
+        return sum(sum(f.stats.cache_misses.values())
+                   for module in (self.kernel, self.problem_kernel) for f in vars(module).values()
+                   if hasattr(f, "stats") and hasattr(f.stats, "cache_misses"))
+
+
+@dataclass
+class ProblemKernel:
+    """A problem's compiled module and what evaluating its integrals needs."""
+
+    kernel: ModuleType
+    integral_names: tuple[str, ...]
+    par: np.ndarray
+
+    def integrals(self, y: np.ndarray) -> np.ndarray:
+        """I_k at every row of y, shape (rows, q)."""
+        y = np.ascontiguousarray(y, dtype=np.float64)
+        out = np.empty((len(y), len(self.integral_names)))
+        if len(y) and self.integral_names:
+            self.kernel.eval_invariants(y, self.par, len(y), out)
+        return out
+
+    def at(self, y) -> tuple[float, ...]:
+        """I_k at one state."""
+        if not self.integral_names:
+            return ()
+        return tuple(float(v) for v in self.kernel.invariants(tuple(float(x) for x in y), self.par))
+
+
+def problem_kernel(problem: Bound) -> ProblemKernel:
+    kernel, meta = load_problem(problem)
+    par = np.array(problem.record.par(problem.values), dtype=np.float64)
+    return ProblemKernel(kernel, tuple(meta["integrals"]), par)
+
+
+_cells: dict[tuple[str, str], CompiledCell] = {}
+
+
+def compile_cell(problem: Bound, method) -> CompiledCell:
+    """Load the cell's kernels, build ``par``, and warm up the driver the cell runs.
+
+    A cell compiled once in this process is kept (keyed by its canonical specs, which fix its
+    module text and ``par``): a worker that runs many cells of one kernel loads it once."""
+    key = (problem.text(), method.text())
+    t0 = time.perf_counter()
+    if key in _cells:
+        return replace(_cells[key], compile_seconds=time.perf_counter() - t0)
+    cell = _compile(problem, method)
+    _cells[key] = cell
+    return cell
+
+
+def _compile(problem: Bound, method) -> CompiledCell:
+    rec = problem.record
+    y0 = tuple(rec.y0(problem.values))
+    t0 = time.perf_counter()
+    kernel, _, _ = load(problem, method)
+    pk = problem_kernel(problem)
+    h0_all = pk.at(y0)
+    extra = []
+    for m in method.modifiers:
+        idx = [pk.integral_names.index(x) for x in m.values["on"]]
+        extra.extend(m.record.runtime(m.values, [h0_all[k] for k in idx]))
+    par = np.concatenate([pk.par, np.array(extra, dtype=np.float64)])
+    cell = CompiledCell(kernel, pk.kernel, pk.integral_names, pk.par, par, y0, h0_all, 0.0)
+    warm_up(cell, method, rec.dim)
+    if pk.integral_names:
+        pk.integrals(np.array([y0]))
+    cell.compile_seconds = time.perf_counter() - t0
+    return cell
+
+
+def warm_up(cell: CompiledCell, method, dim: int) -> None:
+    """One step on scratch arrays: loads (or compiles) the driver the cell runs and all it calls
+    (with dt_out, the dense-output driver)."""
+    y_io = np.array([cell.y0, np.zeros(dim)], dtype=np.float64)
+    out = (np.empty(3), np.empty((3, dim)), np.zeros((3, COUNTERS)))
+    if method.base.values.get("adaptive"):
+        dense = method.base.values.get("dt_out", 0.0) > 0.0
+        drive = cell.kernel.integrate_dense if dense else cell.kernel.integrate_adaptive
+        drive(y_io, np.zeros(ADAPTIVE_STATE), cell.par, 1.0, 1e-3, 1.0, 1e-3, 1e-3, 1, 0.5, 2, 1, 1,
+              *out)
+    else:
+        h = float(method.base.values.get("h", 0.01))
+        cell.kernel.integrate(y_io, np.zeros(FIXED_STATE), cell.par, h, 1, h, 1, 1, *out)
+
+
+def dense_output_refusal(problem: Bound, method) -> str:
+    """Why the cell's accepted steps are not the endpoints of its method's continuous extension
+    (methods/dense_output.py), or "" when dense output applies."""
+    base = method.base
+    if getattr(base.record.data, "dense", None) is None:
+        return f"{base.id} has no continuous extension (dense output: dopri5, dop853)"
+    if not base.values.get("adaptive"):
+        return f"{base.id} runs at fixed step (adaptive=false)"
+    steps = [m.record.id for m in method.modifiers if m.record.kind == "step"]
+    if steps:
+        return f"+{steps[0]} moves each accepted point off the continuous extension's endpoint"
+    if problem.record.post_step is not None:
+        return (f"{problem.id} maps each accepted point by its identification (post_step), off the "
+                f"continuous extension's endpoint")
+    return ""
