@@ -48,7 +48,7 @@ from types import SimpleNamespace
 
 from gnibench.methods.base import H_PARAM, NEWTON_PARAMS, Method
 from gnibench.methods.kernels import genfun
-from gnibench.suite.foundation.cache import cache_dir, write_atomic
+from gnibench.suite.foundation.cache import cache_dir, read_checked, write_checked
 from gnibench.suite.foundation.errors import UserError
 from gnibench.suite.foundation.templates import template
 
@@ -170,12 +170,13 @@ def generating_code(problem) -> str:
     digest = hashlib.sha256(source.encode()).hexdigest()[:16]
     key = f"{problem.id}-genfun{ORDER}-{digest}"
     if key not in _texts:
-        path = cache_dir("problems") / f"{key}.py.txt"
-        if path.exists():
-            _texts[key] = path.read_text()
+        path = cache_dir("problems") / f"{key}.code.py"
+        raw = read_checked(path, "generating-function code")
+        if raw is not None:
+            _texts[key] = raw.decode()
         else:
             _texts[key] = _generate(problem)
-            write_atomic(path, _texts[key])
+            write_checked(path, _texts[key])
     return _texts[key]
 
 

@@ -21,7 +21,7 @@ import json
 import sys
 from types import SimpleNamespace
 
-from gnibench.suite.foundation.cache import cache_dir, write_atomic
+from gnibench.suite.foundation.cache import cache_dir, read_checked, write_checked
 
 
 def _source_hash(problem) -> str:
@@ -35,15 +35,24 @@ def _source_hash(problem) -> str:
 
 def problem_code(problem) -> tuple[str, dict]:
     """Return (source text, metadata) for a problem, from the disk cache or freshly from sympy."""
+    memo = _memo.get(id(problem))
+    if memo is not None and memo[0] is problem:
+        return memo[1], memo[2]
     key = _source_hash(problem)
     d = cache_dir("problems")
-    src_path, meta_path = d / f"{problem.id}-{key}.py.txt", d / f"{problem.id}-{key}.json"
-    if src_path.exists() and meta_path.exists():
-        return src_path.read_text(), json.loads(meta_path.read_text())
-    text, meta = _generate(problem)
-    write_atomic(src_path, text)
-    write_atomic(meta_path, json.dumps(meta))
+    path = d / f"{problem.id}-{key}.code.json"
+    raw = read_checked(path, "problem code")
+    doc = json.loads(raw) if raw is not None else None
+    if doc is None:
+        text, meta = _generate(problem)
+        write_checked(path, json.dumps({"text": text, "meta": meta}))
+    else:
+        text, meta = doc["text"], doc["meta"]
+    _memo[id(problem)] = (problem, text, meta)
     return text, meta
+
+
+_memo: dict[int, tuple] = {}
 
 
 def problem_meta(problem) -> dict:

@@ -12,6 +12,7 @@ from gnibench.suite.runs.experiment import load_experiment, parse_experiment, sh
 from gnibench.suite.runs.storage import read_parquet_meta
 
 OUTPUTS = ("samples.parquet", "cells.parquet", "timings.parquet", "summary.md")
+STORE = (".lock", "parts")       # the resumable store (tests/test_runner_store.py)
 
 # One kernel (kepler-2d x euler) serves every cell: h is a run-time number.
 TINY = """
@@ -87,7 +88,7 @@ vary.problem.p0 = [0.7, 1.4]
 def test_run_end_to_end(tiny, tmp_path, failing_cell, capsys):
     out = tmp_path / "out"
     assert main(["run", str(tiny), "-o", str(out)]) == 0
-    assert sorted(p.name for p in out.iterdir()) == sorted(OUTPUTS)
+    assert sorted(p.name for p in out.iterdir()) == sorted(OUTPUTS + STORE)
     cells = pd.read_parquet(out / "cells.parquet")
     assert list(cells["status"]) == ["ok", "nonfinite", "error"]
     assert cells["reason"][1].startswith("state overflowed")
@@ -125,7 +126,7 @@ def test_interrupt_keeps_finished_cells(tiny, tmp_path, monkeypatch):
 
     monkeypatch.setattr(gnibench.suite.cell.solve, "solve", solve)
     out = tmp_path / "out"
-    assert main(["run", str(tiny), "-o", str(out)]) == 130
+    assert main(["run", str(tiny), "-o", str(out), "-j", "1"]) == 130
     cells = pd.read_parquet(out / "cells.parquet")
     assert list(cells["status"]) == ["ok", "pending", "pending"]
     assert not read_parquet_meta(out / "cells.parquet")["complete"]

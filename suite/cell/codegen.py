@@ -19,9 +19,16 @@ import hashlib
 import importlib.util
 import sys
 import time
+from pathlib import Path
 from typing import Any
 
-from gnibench.suite.foundation.cache import cache_dir, write_atomic
+from gnibench.suite.foundation.cache import (
+    cache_dir,
+    record_numba_files,
+    verify_numba_files,
+    warn,
+    write_atomic,
+)
 from gnibench.suite.foundation.status import kernel_constants
 from gnibench.suite.foundation.templates import Context, template, tuple_helpers
 
@@ -115,8 +122,20 @@ def _import(text: str, prefix: str):
         return _loaded[key]
     d = cache_dir("kernels")
     path = d / f"{prefix}_{key}.py"
+    if path.exists():
+        try:
+            stored = path.read_text()
+        except (OSError, UnicodeDecodeError):
+            stored = None
+        if stored != text:           # the file is named by the hash of its text: it was modified
+            warn(f"cached kernel module {path.name} is corrupt or was modified (it does not match "
+                 f"the text it is named after); discarded and rebuilt")
+            path.unlink()
+            for f in path.parent.glob(f"__pycache__/{path.stem}.*"):
+                f.unlink(missing_ok=True)
     if not path.exists():
         write_atomic(path, text)
+    verify_numba_files(path)
     name = f"gnibench_{prefix}_{key}"
     spec = importlib.util.spec_from_file_location(name, path)
     kernel = importlib.util.module_from_spec(spec)
@@ -137,3 +156,10 @@ def load_problem(problem):
     """Import (generating if needed) the problem's own compiled module: (module, meta)."""
     text, meta = problem_source(problem)
     return _import(text, "problem"), meta
+
+
+def record_compiled(*kernels) -> None:
+    """Record the checksums of the numba cache files of generated modules (after they compiled or
+    loaded what a cell runs; see :func:`gnibench.suite.foundation.cache.record_numba_files`)."""
+    for kernel in kernels:
+        record_numba_files(Path(kernel.__file__))

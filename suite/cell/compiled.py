@@ -13,7 +13,7 @@ from dataclasses import dataclass, replace
 from types import ModuleType
 
 import numpy as np
-from gnibench.suite.cell.codegen import load, load_problem
+from gnibench.suite.cell.codegen import load, load_problem, record_compiled
 from gnibench.suite.foundation.params import Bound
 
 #: length of ``st``, the resumable state of the adaptive drivers (methods/kernels/adaptive.py)
@@ -111,6 +111,7 @@ def _compile(problem: Bound, method) -> CompiledCell:
     warm_up(cell, method, rec.dim)
     if pk.integral_names:
         pk.integrals(np.array([y0]))
+    record_compiled(kernel, pk.kernel)
     cell.compile_seconds = time.perf_counter() - t0
     return cell
 
@@ -145,3 +146,17 @@ def dense_output_refusal(problem: Bound, method) -> str:
         return (f"{problem.id} maps each accepted point by its identification (post_step), off the "
                 f"continuous extension's endpoint")
     return ""
+
+
+def kernel_key(problem: Bound, method) -> str:
+    """What a cell compiles: the hash of its generated module's text (of the transformed system
+    for a transformed problem), or the external engine and problem."""
+    import hashlib
+
+    from gnibench.suite.cell.codegen import module_source
+
+    if getattr(method.base.record, "run", None) is not None:
+        return f"engine:{method.base.record.engine}:{problem.id}"
+    target = problem.record.transformed(problem.values) or problem
+    text, _ = module_source(target, method)
+    return hashlib.sha256(text.encode()).hexdigest()[:20]

@@ -26,12 +26,12 @@ from importlib.metadata import version
 import numpy as np
 from gnibench.methods.engines.heyoka import epsilon, precision_name
 from gnibench.suite.cell.spec import parse_item
-from gnibench.suite.foundation.cache import cache_dir
+from gnibench.suite.foundation.cache import cache_dir, discard, read_checked, warn, write_checked
 from gnibench.suite.foundation.errors import UserError
 from gnibench.suite.foundation.params import Param, bind
 
 BACKENDS = ("exact", "heyoka", "rebound")
-FORMAT = 1                                     # bump when the cached content changes meaning
+FORMAT = 2                                     # bump when the cached content changes meaning
 
 _PRECISION = Param("precision", "double", "working precision", kind="str",
                    choices=("double", "long double", "long-double", "real128"))
@@ -149,26 +149,37 @@ def _full_from_text(text: np.ndarray, precision: str) -> np.ndarray:
     return np.array(flat).reshape(text.shape)
 
 
-def _read(path, spec: ReferenceSpec, t: np.ndarray) -> ReferenceSolution:
-    with np.load(path, allow_pickle=False) as z:
-        y = z["y"]
-        full = _full_from_text(z["y_full"], spec.precision) if "y_full" in z.files else None
-        info = json.loads(str(z["info"]))
+def _read(path, spec: ReferenceSpec, t: np.ndarray) -> ReferenceSolution | None:
+    """A cached reference whose checksum matches and whose grid is ``t``, or None (rebuild)."""
+    import io
+
+    raw = read_checked(path, "reference solution")
+    if raw is None:
+        return None
+    try:
+        with np.load(io.BytesIO(raw), allow_pickle=False) as z:
+            if not np.array_equal(z["t"], t):
+                raise ValueError("another grid")
+            y = z["y"]
+            full = _full_from_text(z["y_full"], spec.precision) if "y_full" in z.files else None
+            info = json.loads(str(z["info"]))
+    except (ValueError, KeyError, OSError):
+        warn(f"cached reference solution {path.name} does not hold what its name says; "
+             f"discarded and rebuilt")
+        discard(path)
+        return None
     return ReferenceSolution(spec, t, y, full, cached=True, info=info)
 
 
 def _write(path, sol: ReferenceSolution) -> None:
-    from gnibench.suite.foundation.cache import atomic_write
+    import io
 
     arrays = {"t": sol.t, "y": sol.y, "info": np.array(json.dumps(sol.info, default=str))}
     if sol.y_full is not None:
         arrays["y_full"] = np.array([str(v) for v in sol.y_full.ravel()]).reshape(sol.y_full.shape)
-
-    def write(p):
-        with open(p, "wb") as f:
-            np.savez(f, **arrays)
-
-    atomic_write(path, write)
+    buffer = io.BytesIO()
+    np.savez(buffer, **arrays)
+    write_checked(path, buffer.getvalue())
 
 
 def reference_solution(problem_bound, t_grid, backend: str | ReferenceSpec = "exact",
@@ -195,8 +206,8 @@ def reference_solution(problem_bound, t_grid, backend: str | ReferenceSpec = "ex
     if t.ndim != 1 or len(t) == 0 or t[0] < 0 or np.any(np.diff(t) <= 0):
         raise UserError("a reference grid must be a non-empty, increasing array of times >= 0")
     path = cache_path(problem_bound, t, spec)
-    if path.exists():
-        sol = _read(path, spec, t)
+    sol = _read(path, spec, t)
+    if sol is not None:
         sol.seconds = time.perf_counter() - t0
         return sol
     from gnibench.methods.engines.heyoka import heyoka_propagate

@@ -49,6 +49,16 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("experiment", help="path to a TOML file, or the name of a shipped experiment")
     r.add_argument("-o", "--output", type=Path, default=None,
                    help="output directory (default: results/<experiment name>)")
+    r.add_argument("-j", "--jobs", type=int, default=None, metavar="N",
+                   help="worker processes (default: the number of cores; 1: serial, in this "
+                        "process)")
+    r.add_argument("--executor", default="local", metavar="local|dask",
+                   help="local: a process pool (default); dask: a Dask LocalCluster of N "
+                        "workers, or the cluster at --scheduler")
+    r.add_argument("--scheduler", metavar="ADDRESS",
+                   help="address of a running Dask scheduler (with --executor dask)")
+    r.add_argument("--fresh", action="store_true",
+                   help="ignore the cells stored by earlier runs in the output directory")
 
     b = sub.add_parser("bench", help="time kernels in ns/step against a C loop")
     b.add_argument("--steps", type=int, default=2_000_000)
@@ -57,8 +67,10 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def _solve(a) -> int:
+    from gnibench.suite.cell.driver import Interrupted
     from gnibench.suite.cell.solve import solve
     from gnibench.suite.metrics.compute import apply, parse_metrics
+    from gnibench.suite.runs.progress import SolveProgress
     from gnibench.suite.runs.storage import write_result
 
     if a.format == "parquet" and a.output is None:
@@ -72,10 +84,19 @@ def _solve(a) -> int:
         if a.reference is not None:
             raise UserError("--reference does not apply with --section (no global error is "
                             "written)")
-    traj = solve(a.problem, a.method, steps=a.steps, t_end=a.t_end, every=a.every,
-                 reference=a.reference, section=a.section)
+    progress = SolveProgress(f"{a.problem} {a.method}")
+    interrupted = None
+    try:
+        traj = solve(a.problem, a.method, steps=a.steps, t_end=a.t_end, every=a.every,
+                     reference=a.reference, section=a.section, progress=progress)
+    except Interrupted as e:              # keep what was computed, then exit 130
+        traj, interrupted = e.partial, e
+    finally:
+        progress.close()
     metrics, skipped = apply(traj, choices)
     write_result(traj, metrics, a.format, a.output, sys.stdout)
+    if interrupted is not None:
+        raise interrupted
     for name, why in skipped.items():
         print(f"gnibench: metric {name} does not apply: {why}", file=sys.stderr)
     if traj.reason:
@@ -100,7 +121,8 @@ def _run(a) -> int:
     from gnibench.reports.markdown import render_summary
     from gnibench.suite.runs.runner import run_experiment
 
-    run_experiment(a.experiment, a.output, summarize=render_summary)
+    run_experiment(a.experiment, a.output, jobs=a.jobs, executor=a.executor,
+                   scheduler=a.scheduler, fresh=a.fresh, summarize=render_summary)
     return 0
 
 

@@ -1,10 +1,21 @@
 """The on-disk cache: generated problem code, compiled kernels and reference solutions.
 
 ``GNIBENCH_CACHE_DIR`` overrides the location (default: ``~/.cache/gnibench``).
+
+Nothing read from the cache is trusted blindly. Every entry gnibench writes carries a checksum
+recorded when it was written (:func:`write_checked`: a ``<name>.sha256`` file beside it) and is
+verified when read (:func:`read_checked`). numba writes its own cache files (``__pycache__`` beside
+each generated module); their checksums are recorded in a manifest after they are written
+(:func:`record_numba_files`) and verified before the module is imported
+(:func:`verify_numba_files`). A corrupt or tampered entry is discarded with one warning line on
+stderr and rebuilt; it never gives a traceback or a wrong number.
 """
 from __future__ import annotations
 
+import hashlib
+import json
 import os
+import sys
 from pathlib import Path
 
 
@@ -24,6 +35,7 @@ def write_atomic(path: Path, text: str) -> None:
 
 
 def atomic_write(path: Path, write) -> None:
+    """``write(tmp)`` to a process-unique temporary file, then rename it onto ``path``."""
     path = Path(path)
     tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
     try:
@@ -32,3 +44,109 @@ def atomic_write(path: Path, write) -> None:
     finally:
         if tmp.exists():
             tmp.unlink()
+
+
+def warn(message: str) -> None:
+    """One warning line on stderr."""
+    print(f"gnibench: warning: {message}", file=sys.stderr, flush=True)
+
+
+def _sum_path(path: Path) -> Path:
+    return path.with_name(path.name + ".sha256")
+
+
+def digest(data: bytes) -> str:
+    return hashlib.sha256(data).hexdigest()
+
+
+def write_checked(path: Path, data: bytes | str) -> None:
+    """Write a cache entry atomically, then its checksum beside it."""
+    path = Path(path)
+    raw = data.encode() if isinstance(data, str) else data
+    atomic_write(path, lambda p: Path(p).write_bytes(raw))
+    atomic_write(_sum_path(path), lambda p: Path(p).write_text(digest(raw) + "\n"))
+
+
+def read_checked(path: Path, what: str) -> bytes | None:
+    """The bytes of a cache entry whose checksum matches, or None when it is absent.
+
+    An entry that is unreadable, has no checksum, or whose content does not match its checksum is
+    deleted with one warning line (``what`` names it), and None is returned: the caller rebuilds.
+    """
+    path = Path(path)
+    if not path.exists():
+        return None
+    try:
+        raw = path.read_bytes()
+        expected = _sum_path(path).read_text().strip()
+    except OSError:
+        expected, raw = None, b""
+    if expected != digest(raw):
+        warn(f"cached {what} {path.name} is corrupt or was modified (checksum mismatch); "
+             f"discarded and rebuilt")
+        discard(path)
+        return None
+    return raw
+
+
+def discard(path: Path) -> None:
+    path = Path(path)
+    path.unlink(missing_ok=True)
+    _sum_path(path).unlink(missing_ok=True)
+
+
+# -- numba's cache files of a generated module --------------------------------------------------
+
+def _numba_files(module_path: Path) -> list[Path]:
+    d = module_path.parent / "__pycache__"
+    if not d.is_dir():
+        return []
+    return sorted(p for p in d.glob(f"{module_path.stem}.*") if p.suffix in (".nbi", ".nbc"))
+
+
+def _manifest(module_path: Path) -> Path:
+    return module_path.parent / "__pycache__" / f"{module_path.stem}.manifest.json"
+
+
+def verify_numba_files(module_path: Path) -> None:
+    """Before importing a generated module: keep only numba cache files whose checksum is in the
+    module's manifest. A listed file that does not match means corruption or tampering: all the
+    module's cache files are discarded (one warning line) and numba recompiles. Files the manifest
+    does not list (a compilation killed before it was recorded) are removed silently."""
+    module_path = Path(module_path)
+    files = _numba_files(module_path)
+    if not files:
+        return
+    try:
+        listed = json.loads(_manifest(module_path).read_text())
+    except (OSError, ValueError):
+        listed = {}
+    bad = [f for f in files if f.name in listed and listed[f.name] != digest(f.read_bytes())]
+    if bad:
+        warn(f"compiled kernel {bad[0].name} is corrupt or was modified (checksum mismatch); "
+             f"discarded and recompiled")
+        for f in files:
+            f.unlink(missing_ok=True)
+        _manifest(module_path).unlink(missing_ok=True)
+        return
+    for f in files:
+        if f.name not in listed:
+            f.unlink(missing_ok=True)
+
+
+def record_numba_files(module_path: Path) -> None:
+    """After this process imported (and possibly compiled) a module: record the checksums of its
+    numba cache files as they are now (they were verified before the import, and numba alone
+    wrote any change since)."""
+    module_path = Path(module_path)
+    files = _numba_files(module_path)
+    if not files:
+        return
+    listed = {f.name: digest(f.read_bytes()) for f in files}
+    path = _manifest(module_path)
+    try:
+        if json.loads(path.read_text()) == listed:
+            return
+    except (OSError, ValueError):
+        pass
+    write_atomic(path, json.dumps(listed, sort_keys=True))

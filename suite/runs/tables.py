@@ -97,21 +97,26 @@ def timing_row(cell, traj=None, status: str = "pending") -> dict:
     return row
 
 
-def samples_table(parts: list[tuple[pd.DataFrame, tuple[str, ...]]]) -> pd.DataFrame:
+def samples_table(parts: list[tuple[pd.DataFrame, tuple[str, ...]]],
+                  all_states: tuple[str, ...] = ()) -> pd.DataFrame:
     """Concatenate cell samples in cell order: fixed columns, states, err_*, global_error, then
-    the other metric columns. ``parts`` are (samples of a cell, its problem's state names).
+    the other metric columns. ``parts`` are (samples of a cell, its problem's state names);
+    ``all_states`` the states of every problem of the experiment, so that a partial table has the
+    columns of problems not run yet.
 
     States and integrals are the union over the cells, in order of first appearance; a column a
     cell's problem lacks is NaN in that cell's rows.
     """
     parts = sorted(parts, key=lambda p: int(p[0]["cell"].iloc[0]) if len(p[0]) else -1)
-    if not parts:
-        return pd.DataFrame({c: pd.Series(dtype=t) for c, t in zip(
-            SAMPLE_FRONT, ("int64", "object", "object", "float64", "int64", "float64"))})
-    df = pd.concat([f for f, _ in parts], ignore_index=True)
-    states: list[str] = []
+    empty = pd.DataFrame({c: pd.Series(dtype=t) for c, t in zip(
+        SAMPLE_FRONT, ("int64", "object", "object", "float64", "int64", "float64"))})
+    states: list[str] = list(all_states)
     for _, names in parts:
         states += [s for s in names if s not in states]
+    df = pd.concat([f for f, _ in parts], ignore_index=True) if parts else empty
+    for s in states:
+        if s not in df.columns:
+            df[s] = pd.Series(float("nan"), index=df.index, dtype="float64")
     errors = [c for c in df.columns if c.startswith("err_")]
     tail = ["global_error"] if "global_error" in df.columns else []
     rest = [c for c in df.columns if c not in SAMPLE_FRONT and c not in states

@@ -1,0 +1,122 @@
+"""Cache integrity: a corrupt or tampered cache entry is discarded and rebuilt with one warning line,
+never a traceback, never a silently wrong number (kernel modules, numba's compiled files,
+generated problem code, reference solutions).
+
+Each test runs ``gnibench solve`` in a fresh process on its own cache directory, damages the entry,
+runs again and compares the output with the first run's.
+"""
+from __future__ import annotations
+
+import json
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+GNIBENCH = [str(Path(sys.executable).with_name("gnibench"))]
+SOLVE = ["solve", "kepler-2d", "rk4:h=0.01", "--steps", "300", "--every", "100"]
+
+
+def _solve(cache: Path, args=SOLVE) -> subprocess.CompletedProcess:
+    return subprocess.run(GNIBENCH + list(args), capture_output=True, text=True, check=False,
+                          env={**os.environ, "GNIBENCH_CACHE_DIR": str(cache)})
+
+
+@pytest.fixture
+def warm(tmp_path):
+    """A cache directory warmed by one run; the run's output."""
+    first = _solve(tmp_path)
+    assert first.returncode == 0 and first.stderr == "", first.stderr
+    return tmp_path, first.stdout
+
+
+def _check_rebuilt(cache: Path, expected: str, what: str, args=SOLVE) -> None:
+    again = _solve(cache, args)
+    assert again.returncode == 0, again.stderr
+    assert "Traceback" not in again.stderr
+    warnings = [ln for ln in again.stderr.splitlines() if ln.startswith("gnibench: warning:")]
+    assert len(warnings) == 1 and what in warnings[0], again.stderr
+    assert again.stdout == expected
+    third = _solve(cache, args)                      # rebuilt: clean from now on
+    assert third.stderr == "" and third.stdout == expected
+
+
+def _cell_module(cache: Path) -> Path:
+    return next(p for p in (cache / "kernels").glob("cell_*.py") if "rk4" in p.read_text()
+                or "0.16666666666666666" in p.read_text())
+
+
+def test_tampered_kernel_module_is_rebuilt(warm):
+    """One RK4 weight changed, still valid Python: the module no longer matches the text it is
+    named after."""
+    cache, expected = warm
+    module = _cell_module(cache)
+    text = module.read_text()
+    assert "0.3333333333333333" in text
+    module.write_text(text.replace("0.3333333333333333", "0.3333333333333", 1))
+    _check_rebuilt(cache, expected, "kernel module")
+
+
+@pytest.mark.parametrize("suffix", [".nbi", ".nbc"])
+def test_truncated_numba_file_is_recompiled(warm, suffix):
+    cache, expected = warm
+    stem = _cell_module(cache).stem
+    files = sorted((cache / "kernels" / "__pycache__").glob(f"{stem}.integrate-*{suffix}"))
+    assert files
+    files[0].write_bytes(files[0].read_bytes()[:20])
+    _check_rebuilt(cache, expected, "compiled kernel")
+
+
+def test_tampered_numba_machine_code_is_recompiled(warm):
+    cache, expected = warm
+    stem = _cell_module(cache).stem
+    nbc = sorted((cache / "kernels" / "__pycache__").glob(f"{stem}.step-*.nbc"))[0]
+    raw = bytearray(nbc.read_bytes())
+    raw[len(raw) // 2] ^= 0xFF
+    nbc.write_bytes(bytes(raw))
+    _check_rebuilt(cache, expected, "compiled kernel")
+
+
+def test_truncated_problem_code_is_regenerated(warm):
+    cache, expected = warm
+    entry = next((cache / "problems").glob("kepler-2d-*.code.json"))
+    entry.write_text(entry.read_text()[:50])
+    _check_rebuilt(cache, expected, "problem code")
+
+
+HEYOKA = ["solve", "lotka-volterra", "rk4:h=0.05", "--steps", "40", "--every", "10",
+          "--reference", "heyoka"]
+
+
+def test_rewritten_reference_is_recomputed(tmp_path):
+    """A reference .npz rewritten with y * 1.001 (a valid file) must not give a wrong
+    global_error: its checksum no longer matches."""
+    first = _solve(tmp_path, HEYOKA)
+    assert first.returncode == 0, first.stderr
+    path = next((tmp_path / "references").glob("lotka-volterra-heyoka-*.npz"))
+    with np.load(path) as z:
+        arrays = {k: z[k] for k in z.files}
+    arrays["y"] = arrays["y"] * 1.001
+    with open(path, "wb") as f:
+        np.savez(f, **arrays)
+    _check_rebuilt(tmp_path, first.stdout, "reference solution", HEYOKA)
+
+
+def test_truncated_reference_is_recomputed(tmp_path):
+    first = _solve(tmp_path, HEYOKA)
+    path = next((tmp_path / "references").glob("lotka-volterra-heyoka-*.npz"))
+    path.write_bytes(path.read_bytes()[:64])
+    _check_rebuilt(tmp_path, first.stdout, "reference solution", HEYOKA)
+
+
+def test_manifest_lists_every_compiled_file(warm):
+    cache, _ = warm
+    stem = _cell_module(cache).stem
+    pycache = cache / "kernels" / "__pycache__"
+    listed = json.loads((pycache / f"{stem}.manifest.json").read_text())
+    files = {p.name for p in pycache.glob(f"{stem}.*") if re.search(r"\.nb[ic]$", p.name)}
+    assert files and set(listed) == files

@@ -1,0 +1,185 @@
+"""The runner at scale: the resumable store (kill -9 and resume), the lock, executors that give
+byte-identical tables, Ctrl-C, and the progress lines."""
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from gnibench.suite.cli.main import main
+from gnibench.suite.runs import store as store_module
+from gnibench.suite.runs.store import Store
+
+GNIBENCH = [str(Path(sys.executable).with_name("gnibench"))]
+TABLES = ("samples.parquet", "cells.parquet")
+
+# Six cells of ~0.3 s each (rk4 on kepler-2d, 10^7 steps, a sample every 2.5 10^6 steps)
+SLOW = """
+name = "slow"
+title = "Six slow cells"
+reference = "[HLW] (2.2)"
+steps = 10000000
+every = 2500000
+
+[[cells]]
+problems = ["kepler-2d"]
+methods = ["rk4"]
+vary.h = [1e-4, 2e-4, 3e-4, 4e-4, 5e-4, 6e-4]
+"""
+
+TINY = """
+name = "tiny"
+title = "Tiny"
+reference = "[HLW] (2.2)"
+steps = 40
+every = 10
+
+[[cells]]
+problems = ["kepler-2d", "pendulum"]
+methods = ["rk4", "stormer-verlet+projection:on=H"]
+vary.h = [0.05, 0.1]
+"""
+
+
+def _write(tmp_path, text, name):
+    path = tmp_path / f"{name}.toml"
+    path.write_text(text)
+    return path
+
+
+def _tables(out: Path) -> dict[str, bytes]:
+    return {name: (out / name).read_bytes() for name in TABLES}
+
+
+def test_kill_9_then_resume_reuses_cells_and_gives_identical_tables(tmp_path):
+    exp = _write(tmp_path, SLOW, "slow")
+    whole, killed = tmp_path / "whole", tmp_path / "killed"
+    subprocess.run(GNIBENCH + ["run", str(exp), "-o", str(whole), "-j", "1"], check=True,
+                   capture_output=True)
+    proc = subprocess.Popen(GNIBENCH + ["run", str(exp), "-o", str(killed), "-j", "1"],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.monotonic() + 120
+    while len(list((killed / "parts").glob("*.parquet"))) < 2:
+        assert proc.poll() is None, "the run ended before it could be killed"
+        assert time.monotonic() < deadline
+        time.sleep(0.02)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    stored = len(list((killed / "parts").glob("*.parquet")))
+    assert 2 <= stored < 6
+    (killed / "parts" / ".abc.parquet.tmp999").write_bytes(b"half a part")   # as a kill leaves
+    again = subprocess.run(GNIBENCH + ["run", str(exp), "-o", str(killed), "-j", "1"],
+                           check=True, capture_output=True, text=True)
+    assert f"({stored} reused from the store, {6 - stored} to compute)" in again.stderr
+    assert _tables(killed) == _tables(whole)
+    assert not list(killed.rglob(".*tmp*"))          # temporary files of killed runs are cleaned
+
+
+def test_second_run_reuses_everything_and_fresh_recomputes(tmp_path, capsys):
+    exp = _write(tmp_path, TINY, "tiny")
+    out = tmp_path / "out"
+    assert main(["run", str(exp), "-o", str(out), "-j", "1"]) == 0
+    first = _tables(out)
+    capsys.readouterr()
+    assert main(["run", str(exp), "-o", str(out), "-j", "1"]) == 0
+    assert "(8 reused from the store, 0 to compute)" in capsys.readouterr().err
+    assert _tables(out) == first
+    assert main(["run", str(exp), "-o", str(out), "-j", "1", "--fresh"]) == 0
+    assert "(0 reused from the store, 8 to compute)" in capsys.readouterr().err
+    assert _tables(out) == first
+
+
+def test_changed_spec_or_code_is_recomputed(tmp_path, capsys, monkeypatch):
+    exp = _write(tmp_path, TINY, "tiny")
+    out = tmp_path / "out"
+    assert main(["run", str(exp), "-o", str(out), "-j", "1"]) == 0
+    capsys.readouterr()
+    exp.write_text(TINY.replace("vary.h = [0.05, 0.1]", "vary.h = [0.05, 0.2]"))
+    assert main(["run", str(exp), "-o", str(out), "-j", "1"]) == 0
+    assert "(4 reused from the store, 4 to compute)" in capsys.readouterr().err
+    monkeypatch.setattr(store_module, "_fingerprint", "another version of the code")
+    assert main(["run", str(exp), "-o", str(out), "-j", "1"]) == 0
+    assert "(0 reused from the store, 8 to compute)" in capsys.readouterr().err
+
+
+def test_a_damaged_part_is_recomputed(tmp_path, capsys):
+    exp = _write(tmp_path, TINY, "tiny")
+    out = tmp_path / "out"
+    assert main(["run", str(exp), "-o", str(out), "-j", "1"]) == 0
+    first = _tables(out)
+    part = sorted((out / "parts").glob("*.parquet"))[3]
+    part.write_bytes(part.read_bytes()[:100])
+    capsys.readouterr()
+    assert main(["run", str(exp), "-o", str(out), "-j", "1"]) == 0
+    assert "(7 reused from the store, 1 to compute)" in capsys.readouterr().err
+    assert _tables(out) == first
+
+
+def test_lock_keeps_a_second_run_off(tmp_path, capsys):
+    exp = _write(tmp_path, TINY, "tiny")
+    out = tmp_path / "out"
+    with Store(out):
+        assert main(["run", str(exp), "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "is in use by another gnibench run" in err[0]
+    assert not (out / "cells.parquet").exists()
+
+
+def test_executors_give_byte_identical_tables(tmp_path):
+    """Serial, a 2-process pool and a 2-worker Dask LocalCluster (a real one)."""
+    pytest.importorskip("distributed")
+    exp = _write(tmp_path, TINY, "tiny")
+    outs = {}
+    for name, args in {"serial": ["-j", "1"], "pool": ["-j", "2"],
+                       "dask": ["--executor", "dask", "-j", "2"]}.items():
+        outs[name] = tmp_path / name
+        assert main(["run", str(exp), "-o", str(outs[name]), *args]) == 0, name
+    assert _tables(outs["pool"]) == _tables(outs["serial"])
+    assert _tables(outs["dask"]) == _tables(outs["serial"])
+
+
+@pytest.mark.parametrize("args,message", [
+    (["--executor", "spark"], "bad --executor 'spark'"),
+    (["-j", "0"], "bad -j 0"),
+    (["--scheduler", "tcp://1.2.3.4:1"], "--scheduler needs --executor dask"),
+])
+def test_bad_executor_options(tmp_path, capsys, args, message):
+    exp = _write(tmp_path, TINY, "tiny")
+    out = tmp_path / "out"
+    assert main(["run", str(exp), "-o", str(out), *args]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and message in err[0]
+    assert not out.exists()
+
+
+def test_ctrl_c_stops_a_long_solve_within_a_second_and_keeps_the_samples(tmp_path):
+    """10^13 steps would take days; SIGINT stops it, the samples so far are written, exit 130."""
+    out = tmp_path / "partial.csv"
+    proc = subprocess.Popen(GNIBENCH + ["solve", "kepler-2d", "rk4:h=1e-9", "--t-end", "10000",
+                                        "--every", "100000000", "-o", str(out)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(4.0)
+    assert proc.poll() is None
+    t0 = time.monotonic()
+    proc.send_signal(signal.SIGINT)
+    proc.wait(timeout=30)
+    assert time.monotonic() - t0 < 1.0
+    assert proc.returncode == 130
+    lines = out.read_text().splitlines()
+    assert lines[0].startswith("t,") and len(lines) >= 2
+    assert "Traceback" not in proc.stderr.read()
+
+
+def test_plain_progress_lines_when_not_a_terminal(tmp_path):
+    exp = _write(tmp_path, TINY, "tiny")
+    run = subprocess.run(GNIBENCH + ["run", str(exp), "-o", str(tmp_path / "out"), "-j", "2"],
+                         check=True, capture_output=True, text=True,
+                         env={**os.environ, "COLUMNS": "100"})
+    lines = run.stderr.strip().splitlines()
+    assert lines[0].startswith("gnibench: tiny: 8 cells")
+    assert sum(line.startswith("[") and "cell " in line for line in lines) == 8
+    assert "\r" not in run.stderr
