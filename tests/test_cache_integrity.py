@@ -74,7 +74,7 @@ def test_truncated_numba_file_is_recompiled(warm, suffix):
 def test_tampered_numba_machine_code_is_recompiled(warm):
     cache, expected = warm
     stem = _cell_module(cache).stem
-    nbc = sorted((cache / "kernels" / "__pycache__").glob(f"{stem}.step-*.nbc"))[0]
+    nbc = min((cache / "kernels" / "__pycache__").glob(f"{stem}.step-*.nbc"))
     raw = bytearray(nbc.read_bytes())
     raw[len(raw) // 2] ^= 0xFF
     nbc.write_bytes(bytes(raw))
