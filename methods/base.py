@@ -14,7 +14,8 @@ from typing import Any
 from gnibench.suite.foundation.errors import UserError
 from gnibench.suite.foundation.params import Param
 
-H_PARAM = Param("h", 0.01, "step size", low=0.0, low_open=True)
+H_PARAM = Param("h", 0.01, "step size (default: 0.01 time scales of the problem)", low=0.0,
+                low_open=True, scaled=True)
 NEWTON_PARAMS = (
     Param("newton_maxit", 50, "maximum Newton iterations per step", kind="int", low=1, high=1000,
           show_default=False),

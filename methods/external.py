@@ -33,8 +33,8 @@ from gnibench.methods.base import Method
 from gnibench.suite.foundation.errors import UserError
 from gnibench.suite.foundation.params import Param
 
-DT_OUT = Param("dt_out", 0.01, "output sampling interval (the engine picks its own steps)",
-               low=0.0, low_open=True)
+DT_OUT = Param("dt_out", 0.01, "output sampling interval (the engine picks its own steps; "
+               "default: 0.01 time scales of the problem)", low=0.0, low_open=True, scaled=True)
 
 
 def _not_compiled(ctx) -> str:

@@ -59,6 +59,12 @@ def _resolve(kind):
 
         meta = problem_meta(problem.record)
         names, pnames = meta["integrals"], meta.get("partial_integrals", [])
+        for name in values.get("partial") or ():
+            if name not in pnames:
+                have = ", ".join(pnames) or "none"
+                raise UserError(f"{kind}: partial={name} is not a partial first integral of "
+                                f"{problem.id} (its partial first integrals: {have}); "
+                                f"observe first integrals with on=")
         given = tuple(values["on"] or ()) + tuple(values.get("partial") or ())
         for name in given:
             if name not in names and name not in pnames:

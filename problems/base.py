@@ -106,6 +106,9 @@ class Problem:
         Choices made where the seeds are silent (also shown by ``gnibench list``).
     sections:
         Poincaré sections (:class:`Section`) that belong to the problem.
+    time_scale:
+        ``time_scale(values) -> float``, the problem's characteristic time (default: 1); default
+        step sizes and output intervals are 0.01 of it.
     post_step:
         Identification map applied after every accepted step, e.g. the homography that maps a
         geodesic back into the fundamental octagon ([B] (8.3)-(8.4)). A numba-compilable template
@@ -127,6 +130,7 @@ class Problem:
     post_step: Callable | None = None
     boundary: Boundary | None = None
     transform: Transform | None = None
+    time_scale: Callable[[dict], float] | None = None
     model_params: tuple[str, ...] = field(default=())
 
     def __post_init__(self):
@@ -161,6 +165,12 @@ class Problem:
         tvalues = {p.name: p.default for p in rec.params}
         tvalues.update(self.transform.to_transformed(self.y0(values), values))
         return Bound(rec, tvalues)
+
+    def time_scale_of(self, values: dict) -> float:
+        """The problem's characteristic time (``time_scale``, default 1: the catalog's units make
+        the motion of order one per unit time). Default step sizes and output intervals are 0.01
+        of it, so a problem in days (the outer solar system) does not get 0.01-day defaults."""
+        return 1.0 if self.time_scale is None else float(self.time_scale(values))
 
     def par(self, values: dict) -> tuple[float, ...]:
         """The run-time parameter tuple for the compiled code (model parameters, in order)."""

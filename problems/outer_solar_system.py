@@ -39,6 +39,17 @@ VELOCITIES = ((0.0, 0.0, 0.0),
               (0.00276725, -0.00170702, -0.00136504))
 
 
+def time_scale(values) -> float:
+    """1/n of the fastest planet (Jupiter, ~730 days): n = sqrt(G m0 / r^3) at its initial distance
+    from the sun, Kepler's third law."""
+    import math
+
+    y0 = PROBLEM.y0(values)
+    q = [y0[len(P_NAMES) + 3 * i: len(P_NAMES) + 3 * i + 3] for i in range(6)]
+    r = min(math.dist(q[i], q[0]) for i in range(1, 6))
+    return float(f"{r ** 1.5 / math.sqrt(values['G'] * values['m0']):.2g}")     # 2 digits: a plain h
+
+
 def model(S):
     from sympy import sqrt
 
@@ -78,7 +89,9 @@ PROBLEM = Problem(
     model=model,
     initial=initial,
     canonical=(P_NAMES, Q_NAMES),
+    time_scale=time_scale,
     notes="(choice) state order p0x, p0y, p0z, ..., p5z, q0x, ..., q5z (bodies 0 sun, 1 Jupiter, "
           "2 Saturn, 3 Uranus, 4 Neptune, 5 Pluto). Table 2.2 gives velocities: p_i = m_i qdot_i; "
-          "the sun starts at rest at the origin. Time unit: days.",
+          "the sun starts at rest at the origin. Time unit: days. Time scale (default h and "
+          "dt_out are 0.01 of it): 1/n of Jupiter, ~730 days.",
 )

@@ -29,9 +29,39 @@ def _count(x) -> str:
     return f"{x:.0f}" if float(x).is_integer() else f"{x:.1f}"
 
 
+_MARKDOWN_SPECIAL = set("\\`*_{}[]()<>#+-.!|~")
+_HTML = {"&": "&amp;", "<": "&lt;", ">": "&gt;", '"': "&quot;"}
+
+
+def escape(text) -> str:
+    """User or file text made inert in Markdown (and in the HTML a Markdown renderer makes of
+    it): HTML specials become entities, Markdown punctuation is backslash-escaped, and line
+    breaks become spaces, so no input can add markup, script, headings or tables."""
+    out = []
+    for c in " ".join(str(text).split()):
+        if c in _HTML:
+            out.append(_HTML[c])
+        elif c in _MARKDOWN_SPECIAL:
+            out.append("\\" + c)
+        else:
+            out.append(c)
+    return "".join(out)
+
+
+def escape_block(text) -> str:
+    """A multi-line user text (a description): each paragraph escaped, paragraphs kept."""
+    paragraphs = [p for p in str(text).replace("\r", "").split("\n\n") if p.strip()]
+    return "\n\n".join(escape(p) for p in paragraphs)
+
+
+def code(text) -> str:
+    """A spec as inline code: a code span cannot hold a backtick, so one is never emitted."""
+    return "`" + str(text).replace("`", "'").replace("\n", " ") + "`"
+
+
 def _cell(x) -> str:
-    """Text safe inside a Markdown table cell."""
-    return str(x).replace("|", "\\|").replace("\n", " ")
+    """Text safe inside a Markdown table cell (already escaped or code)."""
+    return str(x).replace("\n", " ")
 
 
 def _table(header: list[str], rows: list[list[str]]) -> list[str]:
@@ -50,11 +80,12 @@ def render_summary(meta: dict, cells, timings) -> str:
     """
     import pandas as pd
 
-    lines = [f"# {meta.get('title', meta.get('experiment', ''))}", ""]
-    lines.append(f"Experiment `{meta.get('experiment')}` — reference: {meta.get('reference', '')}")
+    lines = [f"# {escape(meta.get('title', meta.get('experiment', '')))}", ""]
+    lines.append(f"Experiment {code(meta.get('experiment'))} — reference: "
+                 f"{escape(meta.get('reference', ''))}")
     lines.append("")
     if meta.get("description"):
-        lines += [meta["description"].strip(), ""]
+        lines += [escape_block(meta["description"]), ""]
     total, done = meta.get("cells_total", len(cells)), meta.get("cells_done", len(cells))
     counts = cells["status"].value_counts()
     order = ("ok", "nonfinite", "newton_failed", "error", "pending")
@@ -76,7 +107,7 @@ def render_summary(meta: dict, cells, timings) -> str:
         rows = []
         for r in part.itertuples(index=False):
             d = r._asdict()
-            row = [d["cell"], f"`{d['method']}`", d["status"], _num(d["t_final"], ".4g"),
+            row = [d["cell"], code(d["method"]), escape(d["status"]), _num(d["t_final"], ".4g"),
                    _num(d["steps"]), _count(d["nfev"])]
             row += [_num(d[c]) for c in errs]
             if has_exact:
@@ -84,8 +115,8 @@ def render_summary(meta: dict, cells, timings) -> str:
             ms = wall.get(d["cell"], float("nan")) * 1e3
             row += [_num(ms, ".3g"), _num(comp.get(d["cell"]), ".2f")]
             rows.append(row)
-        lines += [f"## `{problem}`", ""] + _table(header, rows) + [""]
-        notes = [f"- cell {r.cell} ({r.status}): {r.reason}" for r in part.itertuples()
+        lines += [f"## {code(problem)}", ""] + _table(header, rows) + [""]
+        notes = [f"- cell {r.cell} ({escape(r.status)}): {escape(r.reason)}" for r in part.itertuples()
                  if r.status not in ("ok", "pending") and r.reason]
         if notes:
             lines += notes + [""]

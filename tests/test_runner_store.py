@@ -157,11 +157,13 @@ def test_bad_executor_options(tmp_path, capsys, args, message):
 
 
 def test_ctrl_c_stops_a_long_solve_within_a_second_and_keeps_the_samples(tmp_path):
-    """10^13 steps would take days; SIGINT stops it, the samples so far are written, exit 130."""
+    """10^13 steps would take days (beyond the default step budget, raised here); SIGINT stops
+    it, the samples so far are written, exit 130."""
     out = tmp_path / "partial.csv"
     proc = subprocess.Popen(GNIBENCH + ["solve", "kepler-2d", "rk4:h=1e-9", "--t-end", "10000",
                                         "--every", "100000000", "-o", str(out)],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env={**os.environ, "GNIBENCH_MAX_STEPS": "1e14"})
     time.sleep(4.0)
     assert proc.poll() is None
     t0 = time.monotonic()

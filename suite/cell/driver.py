@@ -36,6 +36,7 @@ from gnibench.suite.cell.compiled import (
 from gnibench.suite.cell.grid import SampleGrid, grid, grid_step
 from gnibench.suite.cell.sections import integrate_section
 from gnibench.suite.cell.trajectory import ReferenceSamples, Trajectory
+from gnibench.suite.foundation.budgets import check_count, check_integer, check_output
 from gnibench.suite.foundation.errors import UserError
 from gnibench.suite.foundation.params import Bound
 from gnibench.suite.foundation.provenance import versions
@@ -84,8 +85,8 @@ def integrate(problem: Bound, method, *, steps: int | None = None, t_end: float 
         Steps per call of a compiled driver: 0 tunes it to ``CALL_SECONDS`` a call, None does
         the whole horizon in one call (the benchmark loop).
     """
-    if every < 1:
-        raise UserError(f"bad --every {every}; allowed: an integer >= 1")
+    check_integer(every, "--every")
+    check_budgets(problem, method, steps, t_end, every, section)
     if section is not None:
         samples = None
         external = getattr(method.base.record, "run", None) is not None
@@ -117,6 +118,31 @@ def integrate(problem: Bound, method, *, steps: int | None = None, t_end: float 
     if reference is not None:
         attach_reference(traj, problem, reference)
     return traj
+
+
+def check_budgets(problem: Bound, method, steps, t_end, every, section) -> None:
+    """Refuse, before any work, a cell beyond the budgets (:mod:`gnibench.suite.foundation.budgets`):
+    steps of a fixed-step method, output rows and their memory."""
+    v = method.base.values
+    h = grid_step(method)
+    nsteps, _ = grid(h, steps, t_end)
+    columns = problem.record.dim + COUNTERS + 1
+    external = getattr(method.base.record, "run", None) is not None
+    adaptive = bool(v.get("adaptive"))
+    what = f"{problem.text()} {method.text()}"
+    if adaptive:
+        check_count(v["max_steps"], what + " (max_steps)", "GNIBENCH_MAX_STEPS", "steps")
+    elif not external:
+        check_count(nsteps, what, "GNIBENCH_MAX_STEPS", "steps")
+    if section is not None:
+        check_integer(section, "--section")
+        check_output(section, columns, what)
+        return
+    dt_out = float(v.get("dt_out", 0.0) or 0.0) if adaptive else 0.0
+    if dt_out > 0.0 and t_end is not None:
+        check_output(t_end / dt_out / every + 2, columns, what)
+    elif not adaptive:
+        check_output(nsteps / every + 2, columns, what)
 
 
 def attach_reference(traj: Trajectory, problem: Bound, reference) -> None:

@@ -5,6 +5,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from gnibench.suite.foundation.budgets import INT_LIMIT, check_integer
 from gnibench.suite.foundation.errors import UserError
 
 
@@ -13,12 +14,15 @@ def grid(h: float, steps: int | None, t_end: float | None) -> tuple[int, float]:
     if (steps is None) == (t_end is None):
         raise UserError("give exactly one of --steps N or --t-end T")
     if steps is not None:
-        if steps < 1:
-            raise UserError(f"bad --steps {steps}; allowed: an integer >= 1")
+        check_integer(steps, "--steps")
         return int(steps), h
     if not (t_end > 0 and math.isfinite(t_end)):
         raise UserError(f"bad --t-end {t_end}; allowed: a finite number > 0")
     ratio = t_end / h
+    if not ratio < INT_LIMIT:
+        raise UserError(f"--t-end {t_end:g} with a step (or output interval) of {h:g} needs more than "
+                        f"2^62 steps; "
+                        f"allowed: a larger step or a shorter horizon")
     n = round(ratio)
     if n >= 1 and abs(ratio - n) <= 1e-9 * max(1.0, ratio):
         return n, t_end - (n - 1) * h

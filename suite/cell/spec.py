@@ -11,9 +11,12 @@ configuration has a canonical text (:func:`canonical`) that parses back to the s
 """
 from __future__ import annotations
 
+import math
 import re
+import warnings
 from dataclasses import dataclass
 
+import numpy as np
 from gnibench.suite.foundation.errors import UserError, unknown
 from gnibench.suite.foundation.params import Bound, bind
 
@@ -24,6 +27,10 @@ _ID = re.compile(r"^[A-Za-z][A-Za-z0-9_-]*$")
 def parse_item(text: str, what: str) -> tuple[str, dict[str, str]]:
     """Split ``id:key=value,...`` into the id and a dict of raw option texts."""
     text = text.strip()
+    bad = next((c for c in text if not c.isprintable()), None)
+    if bad is not None:
+        raise UserError(f"bad {what} spec {text!r}: it contains {bad!r}; allowed: one line, no "
+                        f"control characters")
     name, _, opts = text.partition(":")
     if not _ID.match(name):
         raise UserError(f"bad {what} spec {text!r}: expected id[:key=value,...]")
@@ -65,8 +72,49 @@ def parse_problem(text: str) -> Bound:
         raise unknown("problem", name, REGISTRY)
     rec = REGISTRY[name]
     values = bind(rec.params, given, f"problem {name}")
-    rec.validate(values)
+    with warnings.catch_warnings(), np.errstate(all="ignore"):   # overflow is refused below
+        warnings.simplefilter("ignore")
+        rec.validate(values)
+        check_initial_point(rec, values)
     return Bound(rec, values)
+
+
+def check_initial_point(rec, values: dict) -> None:
+    """Refuse an initial point where the state, a first integral or the vector field is not
+    finite (an overflowing start would run as ``ok`` with every error NaN)."""
+    from gnibench.problems.codegen import python_functions
+
+    what = f"problem {rec.id}"
+    try:
+        y0 = tuple(float(x) for x in rec.y0(values))
+    except (OverflowError, ValueError, ZeroDivisionError) as e:
+        raise UserError(f"{what}: the initial point cannot be computed from these options "
+                        f"({e}); allowed: options giving a finite initial point") from None
+    bad = [s for s, v in zip(rec.state, y0) if not math.isfinite(v)]
+    if bad:
+        raise UserError(f"{what}: initial {bad[0]} = {y0[rec.state.index(bad[0])]}; allowed: "
+                        f"a finite initial point")
+    fns = python_functions(rec)
+    par = rec.par(values)
+    checks = [("the vector field", "base_f")] + [
+        (f"the integral {n}", f"integral_{k}") for k, n in enumerate(_integral_names(rec))]
+    for label, fn in checks:
+        try:
+            value = fns[fn](y0, par)
+            finite = all(math.isfinite(float(v)) for v in (value if isinstance(value, tuple)
+                                                           else (value,)))
+        except (OverflowError, ValueError, ZeroDivisionError):
+            finite = False
+        if not finite:
+            raise UserError(f"{what}: {label} is not finite at the initial point "
+                            f"{', '.join(f'{s}={v:g}' for s, v in zip(rec.state, y0))}; "
+                            f"allowed: a start where the field and the integrals are finite")
+
+
+def _integral_names(rec) -> list[str]:
+    from gnibench.problems.codegen import problem_meta
+
+    return list(problem_meta(rec)["integrals"])
 
 
 def parse_method(text: str, problem: Bound | None = None) -> MethodConfig:
@@ -81,12 +129,23 @@ def parse_method(text: str, problem: Bound | None = None) -> MethodConfig:
             raise UserError(f"{name!r} is a modifier, not a base method; write e.g. rk4:h=0.01+{name}")
         raise unknown("method", name, METHODS)
     rec = METHODS[name]
-    base = Bound(rec, bind(rec.params, given, f"method {name}"))
+    values = bind(rec.params, given, f"method {name}")
+    if problem is not None:          # defaults in units of the problem's time scale (h, dt_out)
+        scale = problem.record.time_scale_of(problem.values)
+        for p in rec.params:
+            if p.scaled and p.name not in given and values.get(p.name) is not None:
+                values[p.name] = p.default * scale
+    base = Bound(rec, values)
     mods = []
+    seen: set[str] = set()
     for part in parts[1:]:
         mname, mgiven = parse_item(part, "modifier")
         if mname not in MODIFIERS:
             raise unknown("modifier", mname, MODIFIERS)
+        if mname in seen:
+            raise UserError(f"modifier +{mname} given twice in {text.strip()!r}; allowed: each "
+                            f"modifier once (observe several integrals with on=A/B)")
+        seen.add(mname)
         mrec = MODIFIERS[mname]
         if mrec.kind == "field" and rec.field_modifiers_refused:
             raise UserError(f"method {name} cannot take a field modifier (+{mname}): "

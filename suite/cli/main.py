@@ -6,15 +6,57 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from pathlib import Path
 
 from gnibench.suite.foundation.errors import UserError
 
 
+class _Once(argparse.Action):
+    """An option given twice is an error, not a silent override (``--steps 10 --steps 20``)."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        given = namespace.__dict__.setdefault("_given", set())
+        if self.dest in given:
+            raise UserError(f"{option_string} given twice; allowed: once")
+        given.add(self.dest)
+        setattr(namespace, self.dest, values if self.nargs != 0 else self.const)
+
+
 class _Parser(argparse.ArgumentParser):
+    def __init__(self, *args, **kw):
+        super().__init__(*args, **kw)
+        self.register("action", None, _Once)
+        self.register("action", "store", _Once)
+        self.register("action", "store_true", _flag)
+
     def error(self, message):  # one line, exit 2 (argparse would print the usage too)
         raise UserError(message)
+
+
+def _flag(option_strings, dest, default=False, required=False, help=None):
+    return _Once(option_strings, dest, nargs=0, const=True, default=default, required=required,
+                 help=help)
+
+
+def _path(text: str) -> Path:
+    if not text.strip():
+        raise UserError(f"bad -o {text!r}: an empty path; allowed: a file or directory name")
+    return Path(text)
+
+
+def check_output_file(path: Path) -> None:
+    """Refuse, before any work, an output file that cannot be written."""
+    if path.is_dir():
+        raise UserError(f"bad -o {path}: it is a directory; allowed: a file name")
+    parent = path.parent
+    if not parent.exists():
+        raise UserError(f"bad -o {path}: directory {parent} does not exist")
+    if not parent.is_dir():
+        raise UserError(f"bad -o {path}: {parent} is not a directory")
+    if not os.access(parent, os.W_OK) or (path.exists() and not os.access(path, os.W_OK)):
+        raise UserError(f"bad -o {path}: not writable")
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -29,7 +71,7 @@ def _parser() -> argparse.ArgumentParser:
     g.add_argument("--t-end", type=float, help="final time T (last step shortened to land on T)")
     s.add_argument("--every", type=int, default=1, help="sample every K steps (plus the final point)")
     s.add_argument("--format", choices=("csv", "json", "parquet"), default="csv")
-    s.add_argument("-o", "--output", type=Path, help="output file (default: stdout)")
+    s.add_argument("-o", "--output", type=_path, help="output file (default: stdout)")
     s.add_argument("--reference", metavar="REF",
                    help="what global_error is measured against: exact | heyoka[:precision=double|"
                         "long double|real128,tol=T] | rebound[:tol=T] (IAS15) | none "
@@ -47,7 +89,7 @@ def _parser() -> argparse.ArgumentParser:
 
     r = sub.add_parser("run", help="run an experiment (TOML file or shipped name)")
     r.add_argument("experiment", help="path to a TOML file, or the name of a shipped experiment")
-    r.add_argument("-o", "--output", type=Path, default=None,
+    r.add_argument("-o", "--output", type=_path, default=None,
                    help="output directory (default: results/<experiment name>)")
     r.add_argument("-j", "--jobs", type=int, default=None, metavar="N",
                    help="worker processes (default: the number of cores; 1: serial, in this "
@@ -75,8 +117,8 @@ def _solve(a) -> int:
 
     if a.format == "parquet" and a.output is None:
         raise UserError("--format parquet needs -o FILE (binary output is not written to stdout)")
-    if a.output is not None and not a.output.parent.exists():
-        raise UserError(f"bad -o {a.output}: directory {a.output.parent} does not exist")
+    if a.output is not None:
+        check_output_file(a.output)
     choices = parse_metrics(a.metrics or "")
     if a.section is not None:
         if a.every != 1:

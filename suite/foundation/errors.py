@@ -8,9 +8,35 @@ class UserError(Exception):
     """Bad input from the user (a spec, an option, a file). The CLI prints it on one line, exit 2."""
 
 
+def edit_distance(a: str, b: str) -> int:
+    """Levenshtein distance (insertions, deletions, substitutions)."""
+    row = list(range(len(b) + 1))
+    for i, ca in enumerate(a, 1):
+        prev, row[0] = row[0], i
+        for j, cb in enumerate(b, 1):
+            prev, row[j] = row[j], min(row[j] + 1, row[j - 1] + 1, prev + (ca != cb))
+    return row[-1]
+
+
+def nearest(name: str, known) -> str | None:
+    """The known id nearest to ``name``: case-insensitive equality first, then the fewest edits
+    (at most a third of the length, ties broken by difflib's similarity)."""
+    known = sorted(known)
+    low = name.lower()
+    for k in known:
+        if k.lower() == low:
+            return k
+    scored = [(edit_distance(low, k.lower()), -difflib.SequenceMatcher(None, low, k.lower()).ratio(),
+               k) for k in known]
+    if not scored:
+        return None
+    dist, _, best = min(scored)
+    return best if dist <= max(1, len(name) // 3) else None
+
+
 def unknown(kind: str, name: str, known) -> UserError:
     """Build the error for an unknown id, suggesting the nearest known one."""
     known = sorted(known)
-    near = difflib.get_close_matches(name, known, n=1, cutoff=0.5)
-    hint = f"; did you mean {near[0]!r}?" if near else ""
+    near = nearest(name, known)
+    hint = f"; did you mean {near!r}?" if near else ""
     return UserError(f"unknown {kind} {name!r}{hint} (known: {', '.join(known)})")

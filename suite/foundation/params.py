@@ -6,10 +6,15 @@ parser and the error messages are all generated from these records (rebound-styl
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 from typing import Any
 
 from gnibench.suite.foundation.errors import UserError
+
+# numbers in specs are ASCII: float() would also take "０.１" (full-width digits) and "0.0_5"
+_FLOAT = re.compile(r"^[+-]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][+-]?[0-9]+)?$", re.ASCII)
+_INT = re.compile(r"^[+-]?[0-9]+$", re.ASCII)
 
 
 @dataclass(frozen=True)
@@ -31,6 +36,7 @@ class Param:
     choices: tuple[str, ...] | None = None
     only_if: tuple[str, Any] | None = None   # (other option, value) under which this one matters
     show_default: bool = True    # canonical text includes it even at its default value
+    scaled: bool = False         # the default is in units of the problem's time scale (h, dt_out)
 
     def range_text(self) -> str:
         if self.choices:
@@ -45,7 +51,10 @@ class Param:
 
     def parse(self, text: str, owner: str) -> Any:
         """Parse and validate one value given as text; raise UserError naming the bad value."""
-        bad = UserError(f"{owner}: bad value {self.name}={text!r}; allowed: {self.range_text()}")
+        note = ""
+        if self.kind in ("float", "int", "floats") and (not text.isascii() or "_" in text):
+            note = " (numbers are written in ASCII digits, without _)"
+        bad = UserError(f"{owner}: bad value {self.name}={text!r}; allowed: {self.range_text()}{note}")
         if self.kind == "bool":
             if text.lower() in ("true", "1", "yes"):
                 return True
@@ -62,19 +71,18 @@ class Param:
                 raise bad
             return names
         if self.kind == "floats":
-            try:
-                vals = tuple(float(x) for x in text.split("/"))
-            except ValueError:
-                raise bad from None
+            parts = text.split("/")
+            if not all(_FLOAT.match(x) for x in parts):
+                raise bad
+            vals = tuple(float(x) for x in parts)
             if not all(math.isfinite(v) for v in vals):
                 raise bad
             for v in vals:
                 self._check_range(v, bad)
             return vals
-        try:
-            val = int(text) if self.kind == "int" else float(text)
-        except ValueError:
-            raise bad from None
+        if not (_INT if self.kind == "int" else _FLOAT).match(text):
+            raise bad
+        val = int(text) if self.kind == "int" else float(text)
         if not math.isfinite(val):
             raise bad
         self._check_range(val, bad)
@@ -120,6 +128,12 @@ def bind(params: tuple[Param, ...], given: dict[str, str], owner: str) -> dict[s
         out[name] = by_name[name].parse(text, owner)
     for p in params:
         out.setdefault(p.name, p.default)
+    for name in given:            # an option that does not apply would be silently dropped
+        p = by_name[name]
+        if not _relevant(p, out):
+            key, want = p.only_if
+            raise UserError(f"{owner}: option {name} applies only with {key}="
+                            f"{by_name[key].format(want)}; drop it or set {key}")
     return out
 
 

@@ -38,12 +38,12 @@ from importlib import resources
 from pathlib import Path
 
 from gnibench.suite.cell.spec import parse_item, split_method
+from gnibench.suite.foundation.budgets import INT_LIMIT, check_count
 from gnibench.suite.foundation.errors import UserError, unknown
 from gnibench.suite.foundation.params import format_float
 
 TOP_KEYS = ("name", "title", "reference", "description", "t_end", "steps", "every", "cells")
 GROUP_KEYS = ("label", "problems", "methods", "t_end", "steps", "every", "vary")
-MAX_SAMPLES = 10_000_000      # rows per cell: beyond this, ask for a larger `every`
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]*$")
 
 
@@ -98,7 +98,13 @@ def load_experiment(name_or_path: str | Path) -> Experiment:
     if path.suffix == ".toml" or "/" in arg or path.is_file():
         if not path.is_file():
             raise UserError(f"no experiment file {arg!r}")
-        text, source = path.read_text(encoding="utf-8"), path.name
+        try:
+            text, source = path.read_text(encoding="utf-8"), path.name
+        except UnicodeDecodeError as e:
+            raise UserError(f"experiment file {arg!r} is not UTF-8 text (byte {e.start}); allowed: "
+                            f"a TOML file in UTF-8") from None
+        except OSError as e:
+            raise UserError(f"cannot read experiment file {arg!r} ({e.strerror})") from None
     else:
         known = shipped()
         if arg not in known:
@@ -118,13 +124,15 @@ def parse_experiment(text: str, source: str) -> Experiment:
     if not _NAME.match(name):
         raise UserError(f"{source}: bad name {name!r}; allowed: letters, digits and . _ - "
                         "(it names the output directory)")
-    title = _text(doc, "title", source, required=True)
-    reference = _text(doc, "reference", source, required=True)
+    title = _text(doc, "title", source, required=True, one_line=True)
+    reference = _text(doc, "reference", source, required=True, one_line=True)
     description = _text(doc, "description", source)
     groups = doc.get("cells")
     if not isinstance(groups, list) or not groups or not all(isinstance(g, dict) for g in groups):
         raise UserError(f"{source}: needs at least one [[cells]] group")
     defaults = {k: doc[k] for k in ("t_end", "steps", "every") if k in doc}
+    planned = sum(_planned_cells(g, f"{source}: cells[{gi}]") for gi, g in enumerate(groups))
+    check_count(planned, f"{source}", "GNIBENCH_MAX_CELLS", "cells")
     cells: list[Cell] = []
     for gi, group in enumerate(groups):
         cells.extend(_expand(group, gi, defaults, f"{source}: cells[{gi}]", len(cells)))
@@ -144,7 +152,8 @@ def _keys(table: dict, allowed: tuple[str, ...], where: str) -> None:
             raise UserError(f"{where}: {unknown('key', key, allowed)}")
 
 
-def _text(table: dict, key: str, where: str, required: bool = False) -> str:
+def _text(table: dict, key: str, where: str, required: bool = False,
+          one_line: bool = False) -> str:
     if key not in table:
         if required:
             raise UserError(f"{where}: missing key {key!r} (a string)")
@@ -152,6 +161,9 @@ def _text(table: dict, key: str, where: str, required: bool = False) -> str:
     value = table[key]
     if not isinstance(value, str) or (required and not value.strip()):
         raise UserError(f"{where}: bad {key} = {value!r}; allowed: a non-empty string")
+    if one_line and any(not c.isprintable() for c in value):
+        raise UserError(f"{where}: bad {key} = {value!r}; allowed: one line of text (no line "
+                        f"breaks or control characters)")
     return value
 
 
@@ -184,9 +196,25 @@ def _horizon(group: dict, defaults: dict, where: str) -> tuple[int | None, float
 
 
 def _integer(value, key: str, where: str) -> int:
-    if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-        raise UserError(f"{where}: bad {key} = {value!r}; allowed: an integer >= 1")
+    if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= INT_LIMIT:
+        raise UserError(f"{where}: bad {key} = {value!r}; allowed: an integer from 1 to 2^62")
     return value
+
+
+def _planned_cells(group, where: str) -> int:
+    """The number of cells a group expands to, counted before expanding it."""
+    if not isinstance(group, dict):
+        return 0
+    n = 1
+    for key in ("problems", "methods"):
+        value = group.get(key)
+        n *= len(value) if isinstance(value, list) else 1
+    vary = group.get("vary", {})
+    if isinstance(vary, dict):
+        for value in vary.values():
+            for vals in (value.values() if isinstance(value, dict) else [value]):
+                n *= len(vals) if isinstance(vals, list) and vals else 1
+    return n
 
 
 def _value_text(value, where: str) -> str:
@@ -241,11 +269,12 @@ def with_options(spec: str, target: str, options: dict[str, str]) -> str:
 
 
 def _expand(group: dict, gi: int, defaults: dict, where: str, first_id: int) -> list[Cell]:
+    from gnibench.suite.cell.driver import check_budgets
     from gnibench.suite.cell.grid import grid, grid_step
     from gnibench.suite.cell.spec import prepare
 
     _keys(group, GROUP_KEYS, where)
-    label = _text(group, "label", where)
+    label = _text(group, "label", where, one_line=True)
     problems = _spec_list(group, "problems", where)
     methods = _spec_list(group, "methods", where)
     steps, t_end, every = _horizon(group, defaults, where)
@@ -266,12 +295,9 @@ def _expand(group: dict, gi: int, defaults: dict, where: str, first_id: int) -> 
                 problem, method = prepare(pspec, mspec)
                 h = grid_step(method)
                 nsteps, h_last = grid(h, steps, t_end)
+                check_budgets(problem, method, steps, t_end, every, None)
             except UserError as e:
                 raise UserError(f"{here}: {e}") from None
-            samples = 2 + nsteps // every
-            if samples > MAX_SAMPLES:
-                raise UserError(f"{here}: {nsteps} steps sampled every {every} give {samples} "
-                                f"rows; allowed: at most {MAX_SAMPLES} (raise every)")
             cells.append(Cell(first_id + len(cells), gi, label, pspec, mspec, problem.text(),
                               method.text(), h, steps, t_end, every, nsteps,
                               (nsteps - 1) * h + h_last))
