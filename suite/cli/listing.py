@@ -21,7 +21,7 @@ def _default(p: dict) -> str:
     if d is None:
         return "-"
     if isinstance(d, tuple):
-        return "/".join(f"{x:g}" for x in d)
+        return "/".join(f"{x:g}" if isinstance(x, (int, float)) else str(x) for x in d)
     return str(d)
 
 
@@ -34,6 +34,7 @@ def as_table(what: str, rows: list[dict]) -> str:
     if what == "metrics":
         for r in rows:
             flags = ["default"] if r["default"] else []
+            flags += ["across the cells of a family"] if r["scope"] == "family" else []
             flags += [f"needs {n}" for n in r["needs"]]
             out.append(f"{r['id']}  {r['title']}  [{', '.join(flags)}]  {r['reference']}")
             out.append(f"    {r['doc']}")

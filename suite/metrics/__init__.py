@@ -1,12 +1,23 @@
 """The metric registry: one line per metric. A new metric is one file plus one line here.
 
-See :mod:`gnibench.suite.metrics.base` for the record, and :mod:`gnibench.suite.metrics.compute`
+See :mod:`gnibench.suite.metrics.base` for the record, :mod:`gnibench.suite.metrics.compute`
 for how metrics are chosen and applied.
 """
-from gnibench.suite.metrics import global_error, invariants
+from gnibench.suite.metrics import (
+    global_error,
+    growth,
+    invariants,
+    pericenter,
+    position_in_orbit,
+    section_stats,
+)
 
 METRICS = {m.id: m for m in (
     invariants.invariant_error,
     invariants.relative_invariant_error,
     global_error.global_error,
+    position_in_orbit.position_in_orbit,
+    pericenter.precession,
+    growth.growth,
+    section_stats.section_stats,
 )}
