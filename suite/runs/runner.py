@@ -3,6 +3,12 @@
 The runner only composes: :func:`gnibench.suite.cell.solve.solve` integrates a cell, :mod:`gnibench.suite.runs.tables` turns
 results into rows, :mod:`gnibench.reports.markdown` renders the summary from the tables.
 
+Metrics: each cell's chosen metrics (``Cell.metrics``) are applied to its trajectory in
+:func:`run_cell`; metrics across cells (``order``: families of cells that differ only in h) are
+computed at each write from the cells and samples tables alone
+(:func:`gnibench.suite.metrics.families.family_columns`), so they do not depend on where or in
+which order the cells ran.
+
 Outputs in ``out_dir`` (default ``results/<experiment name>``), each written atomically:
 ``samples.parquet``, ``cells.parquet``, ``timings.parquet`` and ``summary.md`` (columns: see
 ``suite/experiments/README.md``). Each Parquet file carries the provenance (experiment name and
@@ -64,9 +70,9 @@ def run_cell(cell: Cell) -> CellOutcome:
         with np.errstate(all="ignore"):     # overflow in a diverging cell is a status, not noise
             traj = solve(cell.problem_spec, cell.method_spec, steps=cell.steps,
                          t_end=cell.t_end, every=cell.every)
-            metrics, _ = apply(traj, parse_metrics(cell.metrics))
+            metrics, skipped = apply(traj, parse_metrics(cell.metrics), families=False)
             samples = cell_samples(cell, traj, metrics)
-            row = cell_row(cell, traj, metrics)
+            row = cell_row(cell, traj, metrics, skipped=skipped)
     except Exception as e:  # noqa: BLE001 - any failure of one cell is recorded, the run goes on
         reason = f"{type(e).__name__}: {e}".replace("\n", " ")
         return CellOutcome(cell, "error", reason, None, cell_row(cell, None, None, "error", reason),
@@ -147,6 +153,7 @@ class _Writer:
         return time.perf_counter() - self.last_write >= FLUSH_RATIO * self.write_cost
 
     def flush(self) -> None:
+        from gnibench.suite.metrics.families import family_columns
         from gnibench.suite.runs.storage import atomic_write, write_parquet
         from gnibench.suite.runs.tables import cell_row, cells_table, samples_table, timing_row, timings_table
 
@@ -157,7 +164,9 @@ class _Writer:
         rows = [self.done[c.id].row if c.id in self.done else cell_row(c) for c in cells]
         timings = [self.done[c.id].timing if c.id in self.done else timing_row(c) for c in cells]
         meta = self.provenance(len(done))
-        cells_df, timings_df = cells_table(rows), timings_table(timings)
+        # metrics across cells (families equal but for h): a function of the two tables only
+        cells_df = family_columns(cells_table(rows), samples)
+        timings_df = timings_table(timings)
         write_parquet(samples, self.out / "samples.parquet", {**meta, "table": "samples"})
         write_parquet(cells_df, self.out / "cells.parquet", {**meta, "table": "cells"})
         write_parquet(timings_df, self.out / "timings.parquet",
@@ -177,5 +186,6 @@ class _Writer:
                 "versions": versions(), "complete": ndone == len(e.cells), "cells_done": ndone,
                 "cells_total": len(e.cells),
                 "cells": [{"cell": c.id, "problem": c.problem, "method": c.method,
-                           "steps": c.steps, "t_end": c.t_end, "every": c.every}
+                           "steps": c.steps, "t_end": c.t_end, "every": c.every,
+                           "metrics": list(c.metrics)}
                           for c in e.cells]}
