@@ -66,8 +66,9 @@ def signed_angles(q0: np.ndarray, q: np.ndarray, c0: np.ndarray) -> np.ndarray:
     return np.arctan2(sign * np.linalg.norm(w, axis=1), q @ q0)
 
 
-def eta(traj, problem, rtol: float = 1e-12) -> tuple[np.ndarray, np.ndarray]:
-    """(η, unwrapped signed phase) at every sample; NaN off the whole periods ([B] §5.2)."""
+def eta(traj, problem, rtol: float = 1e-12) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(η, unwrapped signed phase, n) at every sample; η and the phase are NaN off the whole
+    periods, where n is -1 ([B] §5.2)."""
     p_names, q_names = problem.record.canonical
     q, _ = positions_and_momenta(traj, problem)
     start = dict(zip(traj.state_names, np.asarray(traj.y0, dtype=float)))
@@ -82,13 +83,12 @@ def eta(traj, problem, rtol: float = 1e-12) -> tuple[np.ndarray, np.ndarray]:
     eta_col[rows] = np.abs(angles)
     finite = np.isfinite(angles)           # a diverged state stays NaN; the rest is unwrapped
     phase[rows[finite]] = np.unwrap(angles[finite])
-    return eta_col, phase
+    return eta_col, phase, n
 
 
 def _compute(traj, problem, values) -> MetricOutput:
     period = period_of(problem)
-    eta_col, phase = eta(traj, problem, values["rtol"])
-    n = whole_periods(traj.t, period, values["rtol"])
+    eta_col, phase, n = eta(traj, problem, values["rtol"])
     rows = np.flatnonzero(n >= 1)
     out = MetricOutput(columns={"eta": eta_col, "eta_phase": phase})
     nan = float("nan")
