@@ -188,7 +188,7 @@ class Problem:
             "state": list(self.state), "integrals": meta["integrals"],
             "partition": [list(b) for b in self.partition] if self.partition else None,
             "separable": meta["explicit_u"] and meta["explicit_v"] if self.partition else False,
-            "exact_solution": self.exact is not None,
+            "exact_solution": self.exact is not None, "period": self.period is not None,
             "params": [p.describe() for p in self.params], "notes": self.notes,
         }
 

@@ -50,7 +50,8 @@ def as_table(what: str, rows: list[dict]) -> str:
             out.append(f"{r['id']}  {r['title']}  {r['reference']}")
             out.append(f"    state: {', '.join(r['state'])}   integrals: {', '.join(r['integrals'])}"
                        f"   partition: {r['partition'] and ' | '.join(','.join(b) for b in r['partition'])}"
-                       f"   exact solution: {'yes' if r['exact_solution'] else 'no'}")
+                       f"   exact solution: {'yes' if r['exact_solution'] else 'no'}"
+                       f"   period: {'yes' if r['period'] else 'no'}")
             out.append(f"    options: {_params(r['params'])}")
             if r["notes"]:
                 out.append(f"    notes: {r['notes']}")

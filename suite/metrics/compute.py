@@ -99,7 +99,9 @@ def sampling_needs(choices, problem) -> dict[str, float]:
     samples at whole periods t = nT (η(nT), [B] §5.2) and the problem has a period T; else ``{}``.
 
     The driver facade's ``dt_out`` grid (or, for a fixed-step method whose h divides T, ``every``
-    = :func:`steps_per_period`) gives those samples; a metric that finds none says so.
+    = :func:`steps_per_period`) gives those samples; a metric that finds none says so. T is the
+    period in t, also for a transformed problem (K-S), whose integration variable is not t (see
+    :mod:`gnibench.suite.metrics.position_in_orbit`).
     """
     period = getattr(problem.record, "period", None)
     if period is None or not any("period" in c.metric.needs for c in choices):

@@ -18,6 +18,11 @@ of less than π per period).
 η is defined only at samples with t = nT (to ``rtol`` relative); elsewhere the column is NaN.
 The samples at whole periods come from the sampling: ``dt_out = T``
 (:func:`gnibench.suite.metrics.compute.sampling_needs`) or, at fixed step h = T/N, ``every = N``.
+Under K-S ([B] (5.4), ``kepler-3d:ks=true``) the integration runs in the fictitious time s, in
+which one revolution takes Δs = 2π √(a/μ) (1 for [B]'s orbit): a fixed step Δs/N with ``every =
+N`` samples each revolution, at a time t(s) that is nT only up to the integration error, so those
+samples count with a looser ``rtol`` (e.g. 1e-6; the gap "how η(nT) is sampled for K-S" of
+CLAIMS.md).
 """
 from __future__ import annotations
 
