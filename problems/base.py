@@ -36,7 +36,7 @@ class Section:
     (e.g. G-S: g = p1, condition p2 > 0). ``g`` and ``condition`` map the sympy namespace ``S`` to
     expressions. ``coords`` names the state components (or ``chart_coords``) recorded at a crossing;
     ``chart``, if given, is ``chart(y) -> int`` (numpy, 1-based) for multi-chart sections such as
-    so(4)'s Γ1..Γ8.
+    so(4)'s Γ1..Γ8, and ``charts`` is their number (8 there).
     """
 
     name: str
@@ -45,6 +45,7 @@ class Section:
     coords: tuple[str, ...]
     reference: str = ""
     chart: Callable | None = None
+    charts: int = 0
 
 
 @dataclass(frozen=True)
@@ -102,6 +103,10 @@ class Problem:
         ``(u names, v names)`` for partitioned methods ([HLW] (1.8)); defaults to ``canonical``.
     exact:
         ``exact(t, y0, values) -> array (len(t), N)``, the exact solution, or None.
+    period:
+        ``period(values) -> float``, the period of the solution from the option values (initial
+        point included), or None when the problem has none. Metrics sampled at whole periods
+        (η(nT), [B] §5.2) need it.
     notes:
         Choices made where the seeds are silent (also shown by ``gnibench list``).
     sections:
@@ -125,6 +130,7 @@ class Problem:
     canonical: tuple[tuple[str, ...], tuple[str, ...]] | None = None
     partition: tuple[tuple[str, ...], tuple[str, ...]] | None = None
     exact: Callable | None = None
+    period: Callable[[dict], float] | None = None
     notes: str = ""
     sections: tuple[Section, ...] = ()
     post_step: Callable | None = None
@@ -192,7 +198,7 @@ class Problem:
             "state": list(self.state), "integrals": meta["integrals"],
             "partition": [list(b) for b in self.partition] if self.partition else None,
             "separable": meta["explicit_u"] and meta["explicit_v"] if self.partition else False,
-            "exact_solution": self.exact is not None,
+            "exact_solution": self.exact is not None, "period": self.period is not None,
             "params": [p.describe() for p in self.params], "notes": self.notes,
         }
 

@@ -117,7 +117,7 @@ class EulerSO4(Problem):
 SECTION = Section(
     name="x2=0", g=lambda S: S.x2,
     condition=lambda S: -((S.lam1 - S.lam3) * S.x1 * S.x3 + (S.lam4 - S.lam6) * S.x4 * S.x6),  # -x2'
-    coords=("x5", "x6"), reference="[B] §7.1, (7.5)-(7.7)", chart=chart)
+    coords=("x5", "x6"), reference="[B] §7.1, (7.5)-(7.7)", chart=chart, charts=8)
 
 PROBLEM = EulerSO4(
     id="euler-so4",

@@ -26,5 +26,6 @@ PROBLEM = Problem(
     initial=lambda v: (1.0, 0.0),
     canonical=(("p",), ("q",)),
     exact=exact,
+    period=lambda values: 2 * np.pi,
     notes="(choice) default initial point (q, p) = (1, 0), so H0 = 1/2.",
 )

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 from gnibench.problems.base import Model, Problem, require
-from gnibench.problems.kepler_exact import kepler_orbit_2d
+from gnibench.problems.kepler_exact import kepler_orbit_2d, kepler_period
 from gnibench.suite.foundation.params import Param
 
 
@@ -37,6 +37,12 @@ def exact(t, y0, values):
     return np.column_stack([pt, qt])
 
 
+def period(values) -> float:
+    """2 pi a^(3/2) with a = -1/(2 H0) from the initial point ([HLW] (2.11): 2 pi)."""
+    p1, p2, q1, q2 = PROBLEM.y0(values)
+    return kepler_period((q1, q2), (p1, p2), mu=1.0)
+
+
 class Kepler2D(Problem):
     def validate(self, values):
         y0 = self.y0(values)
@@ -56,4 +62,5 @@ PROBLEM = Kepler2D(
     initial=initial,
     canonical=(("p1", "p2"), ("q1", "q2")),
     exact=exact,
+    period=period,
 )

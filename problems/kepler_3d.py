@@ -19,6 +19,7 @@ import numpy as np
 from gnibench.problems import kepler_ks
 from gnibench.problems.base import Model, Problem, Transform, require
 from gnibench.problems.kepler3d_exact import kepler_orbit_3d, state_from_elements
+from gnibench.problems.kepler_exact import kepler_period
 from gnibench.suite.foundation.params import Param
 
 
@@ -48,6 +49,13 @@ def exact(t, y0, values):
     y0 = np.asarray(y0, dtype=float)
     q, p = kepler_orbit_3d(y0[:3], y0[3:], np.asarray(t, dtype=float), values["mu"])
     return np.column_stack([q, p])
+
+
+def period(values) -> float:
+    """2 pi sqrt(a^3/mu) with a = -mu/(2 H0) from the initial point ([B] §5.2: 1 for the default
+    orbit); the same under ks=true (the period of the motion in t)."""
+    y0 = PROBLEM.y0(values)
+    return kepler_period(y0[:3], y0[3:], mu=values["mu"])
 
 
 def _to_ks(y0, values):
@@ -107,6 +115,7 @@ PROBLEM = Kepler3D(
     initial=initial,
     canonical=(("p1", "p2", "p3"), ("q1", "q2", "q3")),
     exact=exact,
+    period=period,
     notes=NOTES,
     transform=KS,
 )

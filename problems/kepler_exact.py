@@ -23,6 +23,17 @@ def solve_kepler(M: np.ndarray, e: float) -> np.ndarray:
     return E + (M - Mr)
 
 
+def kepler_period(q0, p0, mu: float = 1.0) -> float:
+    """Period 2 pi a^(3/2) / sqrt(mu) of the bound orbit through (q0, p0) (any dimension), with
+    a = -mu / (2 H0) from the initial energy H0 = |p0|^2/2 - mu/|q0| ([B] §5.1; [HLW] (2.11): 2 pi)."""
+    q0, p0 = np.asarray(q0, dtype=float), np.asarray(p0, dtype=float)
+    energy = 0.5 * float(p0 @ p0) - mu / float(np.sqrt(q0 @ q0))
+    if energy >= 0:
+        raise ValueError("kepler_period needs a bound orbit (H < 0)")
+    a = -mu / (2 * energy)
+    return float(2 * np.pi * np.sqrt(a**3 / mu))
+
+
 def kepler_orbit_2d(q0, p0, t, mu=1.0):
     """Positions and momenta (arrays (len(t), 2)) of the bound Kepler orbit through (q0, p0)."""
     q0 = np.asarray(q0, dtype=float)

@@ -58,3 +58,31 @@ def gradients(spec: str, k: int, ys) -> np.ndarray:
     mod, _, par = base_module(spec)
     grad = getattr(mod, f"grad_{k}")
     return np.array([grad(tuple(y), par) for y in ys])
+
+
+def synthetic_trajectory(spec: str, t, y, *, exact_reference: bool = False, kind: str = "samples",
+                         chart=None, provenance: dict | None = None, y0=None):
+    """A Trajectory built from given samples (e.g. the exact solution, or a constructed one) for
+    testing metrics against known answers: the problem's integrals are evaluated at the samples
+    by the problem's own compiled functions, y0 is the first sample (or ``y0``), and with
+    ``exact_reference`` the exact solution at the sample times is attached as the reference."""
+    from gnibench.suite.cell.compiled import problem_kernel
+    from gnibench.suite.cell.spec import parse_problem
+    from gnibench.suite.cell.trajectory import ReferenceSamples, Trajectory
+    from gnibench.suite.foundation.status import Status
+
+    prob = parse_problem(spec)
+    t = np.ascontiguousarray(t, dtype=float)
+    y = np.ascontiguousarray(y, dtype=float)
+    y0 = tuple(float(v) for v in (y[0] if y0 is None else y0))
+    pk = problem_kernel(prob)
+    reference = None
+    if exact_reference:
+        reference = ReferenceSamples(prob.record.exact(t, y0, prob.values), {"backend": "exact"})
+    zeros = np.zeros(len(t))
+    return Trajectory(
+        problem=prob.text(), method="synthetic", state_names=prob.record.state, t=t, y=y,
+        steps=np.arange(len(t)), nfev=zeros, njev=zeros, rejected=zeros,
+        integral_names=pk.integral_names, integrals=pk.integrals(y), H0=pk.at(y0), y0=y0,
+        status=Status.OK, kind=kind, chart=chart, reference=reference,
+        provenance=dict(provenance or {}))

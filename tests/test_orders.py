@@ -1,22 +1,17 @@
 """Observed order of convergence of every fixed-step method (GeometricIntegrators.jl style).
 
 The global error at a fixed final time T is measured against the problem's exact solution for
-h = T/(n0 2^k), k = 0..10; the order is the least-squares slope of log(error) against log(h).
-Points below a 1e-13 round-off plateau, points after the error stops decreasing, and failed runs
-are dropped. Of the longest remaining run of decreasing errors, end points whose local rate
-log(e_k/e_{k+1})/log 2 differs from the run's median rate by more than 20% are trimmed (the
-pre-asymptotic coarse end; the fine end where rounding, which grows with the number of steps, slows
-the decrease, e.g. an 8th-order method near 1e-13 on Kepler), and the finest (at most) five points
-are fitted. The trimming uses only the data, never the declared order. At least three points must
-remain and the slope must agree with the method's declared classical order to ±0.35
-([HLW] (1.5)-(1.7), (1.9), (1.17); global error O(t h^p), [HLW] Table 2.1).
+h = T/(n0 2^k), k = 0..10; the order is the least-squares slope of log(error) against log(h) by
+:func:`gnibench.suite.metrics.order.observed_order` (round-off plateau, non-decreasing tail and
+failed runs dropped, end points off the median local rate trimmed, the finest five fitted; its
+module docstring has the details). At least three points must remain and the slope must agree
+with the method's declared classical order to ±0.35 ([HLW] (1.5)-(1.7), (1.9), (1.17); global
+error O(t h^p), [HLW] Table 2.1).
 
 T is deliberately not a multiple of the period: at a full Kepler period the O(h) error terms of
 symplectic Euler cancel by symmetry and it shows a spurious order 2.
 """
 from __future__ import annotations
-
-import itertools
 
 import numpy as np
 import pytest
@@ -26,6 +21,7 @@ from gnibench.suite.cell.solve import solve
 from gnibench.suite.cell.spec import prepare
 from gnibench.suite.foundation.errors import UserError
 from gnibench.suite.metrics.global_error import global_errors
+from gnibench.suite.metrics.order import FIT, observed_order
 
 # (problem spec, T, n0): nonlinear problems with exact solutions
 ORDER_CASES = {
@@ -33,9 +29,6 @@ ORDER_CASES = {
     "kepler-2d": ("kepler-2d", 3.0, 24),                # e = 0.6, exact via Kepler's equation
 }
 LEVELS = 11
-FIT = 5
-PLATEAU = 1e-13
-TRIM = 0.2
 TOL = 0.35
 
 COMPILED = getattr(methods, "COMPILED", methods.METHODS)   # external engines have their own tests
@@ -62,39 +55,6 @@ def _applies(mid, pid) -> bool:
 
 CELLS = [pytest.param(mid, pid, id=f"{mid}-{pid}")
          for mid, m in COMPILED.items() if _fixed_step(m) for pid in ORDER_CASES if _applies(mid, pid)]
-
-
-def _local_rates(hs, errs, idx):
-    return [np.log(errs[a] / errs[b]) / np.log(hs[a] / hs[b]) for a, b in itertools.pairwise(idx)]
-
-
-def observed_order(hs: np.ndarray, errs: np.ndarray) -> tuple[float, int]:
-    """Least-squares log-log slope over the usable points (see module docstring), and their number."""
-    best: list[int] = []
-    run: list[int] = []
-    for k, e in enumerate(errs):
-        ok = np.isfinite(e) and e >= PLATEAU
-        if ok and run and e < errs[run[-1]]:
-            run.append(k)
-        else:
-            run = [k] if ok else []
-        if len(run) > len(best):
-            best = list(run)
-    # trim end points whose local rate is off the run's median rate by more than TRIM (the coarse
-    # pre-asymptotic end, the fine end approaching the round-off floor)
-    while len(best) >= 4:
-        rates = _local_rates(hs, errs, best)
-        med = float(np.median(rates))
-        ends = {0: abs(rates[0] - med), -1: abs(rates[-1] - med)}
-        end = max(ends, key=ends.get)
-        if ends[end] <= TRIM * abs(med):
-            break
-        best.pop(end)
-    keep = best[-FIT:]
-    if len(keep) < 2:
-        return float("nan"), len(keep)
-    slope = np.polyfit(np.log(hs[keep]), np.log(errs[keep]), 1)[0]
-    return float(slope), len(keep)
 
 
 def test_observed_order_helper_on_synthetic_data():

@@ -21,7 +21,7 @@ def _default(p: dict) -> str:
     if d is None:
         return "-"
     if isinstance(d, tuple):
-        return "/".join(f"{x:g}" for x in d)
+        return "/".join(f"{x:g}" if isinstance(x, (int, float)) else str(x) for x in d)
     return str(d)
 
 
@@ -34,6 +34,7 @@ def as_table(what: str, rows: list[dict]) -> str:
     if what == "metrics":
         for r in rows:
             flags = ["default"] if r["default"] else []
+            flags += ["across the cells of a family"] if r["scope"] == "family" else []
             flags += [f"needs {n}" for n in r["needs"]]
             out.append(f"{r['id']}  {r['title']}  [{', '.join(flags)}]  {r['reference']}")
             out.append(f"    {r['doc']}")
@@ -49,7 +50,8 @@ def as_table(what: str, rows: list[dict]) -> str:
             out.append(f"{r['id']}  {r['title']}  {r['reference']}")
             out.append(f"    state: {', '.join(r['state'])}   integrals: {', '.join(r['integrals'])}"
                        f"   partition: {r['partition'] and ' | '.join(','.join(b) for b in r['partition'])}"
-                       f"   exact solution: {'yes' if r['exact_solution'] else 'no'}")
+                       f"   exact solution: {'yes' if r['exact_solution'] else 'no'}"
+                       f"   period: {'yes' if r['period'] else 'no'}")
             out.append(f"    options: {_params(r['params'])}")
             if r["notes"]:
                 out.append(f"    notes: {r['notes']}")

@@ -6,6 +6,10 @@ columns (they join the samples table, one value per row of the trajectory) and p
 (they join ``cells.parquet``). Tables, figures, reports and the claims ledger read these outputs
 only. Metrics are chosen with the spec syntax: ``--metrics eta,growth:of=H`` on the command line,
 ``metrics = ["eta", "growth:of=H"]`` in an experiment file.
+
+Two scopes: a ``cell`` metric is a function of one trajectory; a ``family`` metric (the observed
+order, :mod:`gnibench.suite.metrics.order`) is a function of the cells and samples tables of the
+cells of an experiment that differ only in the step size h (:mod:`gnibench.suite.metrics.families`).
 """
 from __future__ import annotations
 
@@ -24,6 +28,8 @@ NEEDS = {
     "section": "the cell's samples are section crossings (--section)",
     "samples": "the cell's samples are a trajectory (not section crossings)",
 }
+
+SCOPES = ("cell", "family")
 
 
 @dataclass
@@ -47,9 +53,16 @@ class Metric:
 
     ``compute(trajectory, problem, values) -> MetricOutput``; ``values`` are the metric's options,
     validated against ``params``. ``needs`` lists the keys of :data:`NEEDS` the cell must meet;
-    ``columns`` and ``scalars`` document the names it writes (``<I>`` stands for each integral,
-    ``<X>`` for each error it is applied to). ``default`` metrics are computed for every cell they
-    apply to.
+    ``problem_check(problem, values) -> str`` and ``check(trajectory, problem, values) -> str``, if
+    given, say why else the metric does not apply (to the problem: known before integrating; to
+    the trajectory); ``validate(values) -> str`` checks options against each other (a non-empty
+    text is a bad choice). ``columns`` and ``scalars`` document the names it writes (``<I>`` stands for
+    each integral, ``<X>`` for each error it is applied to). ``default`` metrics are computed for
+    every cell they apply to.
+
+    A ``family`` metric (``scope="family"``) has ``compute(cells, samples, values) -> DataFrame``:
+    the cells and samples tables of one family (cells equal in everything but h), returning one
+    row per cell (index: cell id) of columns for ``cells.parquet``.
     """
 
     id: str
@@ -62,9 +75,35 @@ class Metric:
     columns: tuple[tuple[str, str], ...] = ()
     scalars: tuple[tuple[str, str], ...] = ()
     default: bool = False
+    scope: str = "cell"
+    problem_check: Callable | None = None
+    check: Callable | None = None
+    validate: Callable | None = None
 
-    def why_not(self, traj, problem) -> str:
+    def __post_init__(self):
+        unknown_needs = set(self.needs) - set(NEEDS)
+        if unknown_needs or self.scope not in SCOPES:
+            raise ValueError(f"metric {self.id}: bad needs {sorted(unknown_needs)} or scope "
+                             f"{self.scope!r}")
+
+    def problem_why_not(self, problem, values=None) -> str:
+        """Why the metric cannot apply to any cell of this problem ("" when it may)."""
+        values = {} if values is None else values
+        rec = problem.record
+        if "integrals" in self.needs and not _integral_names(rec):
+            return f"{problem.id} has no first integrals"
+        if "period" in self.needs and getattr(rec, "period", None) is None:
+            return f"{problem.id} has no period"
+        if "section" in self.needs and not rec.sections:
+            return f"{problem.id} has no Poincaré section"
+        return self.problem_check(problem, values) if self.problem_check is not None else ""
+
+    def why_not(self, traj, problem, values=None) -> str:
         """Why the metric does not apply to this cell ("" when it does)."""
+        values = {} if values is None else values
+        if self.scope == "family":
+            return (f"{self.id} is computed across the cells of an experiment that differ only "
+                    "in h (gnibench run), not from one cell")
         for need in self.needs:
             if need == "integrals" and not traj.integral_names:
                 return f"{problem.id} has no first integrals"
@@ -76,11 +115,15 @@ class Metric:
                 return "the samples are not section crossings (use --section)"
             if need == "samples" and traj.kind != "samples":
                 return "the samples are section crossings, not a trajectory"
-        return ""
+        if self.problem_check is not None:
+            why = self.problem_check(problem, values)
+            if why:
+                return why
+        return self.check(traj, problem, values) if self.check is not None else ""
 
     def describe(self) -> dict:
         return {"id": self.id, "title": self.title, "reference": self.reference, "doc": self.doc,
-                "needs": list(self.needs), "default": self.default,
+                "scope": self.scope, "needs": list(self.needs), "default": self.default,
                 "params": [p.describe() for p in self.params],
                 "columns": dict(self.columns), "scalars": dict(self.scalars)}
 
@@ -96,6 +139,18 @@ class MetricChoice:
         parts = [f"{p.name}={p.format(self.values[p.name])}" for p in self.metric.params
                  if self.values.get(p.name) is not None and self.values[p.name] != p.default]
         return self.metric.id + (":" + ",".join(parts) if parts else "")
+
+
+def _integral_names(rec) -> tuple[str, ...]:
+    """The names of a problem record's first integrals (from its sympy model)."""
+    from gnibench.problems.codegen import problem_meta
+
+    return tuple(problem_meta(rec)["integrals"])
+
+
+def integral_names(problem) -> tuple[str, ...]:
+    """The names of a parsed problem's first integrals, in the order of ``Trajectory.integrals``."""
+    return _integral_names(problem.record)
 
 
 def max_abs(values: np.ndarray) -> float:

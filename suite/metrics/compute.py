@@ -1,4 +1,4 @@
-"""Choosing metrics (spec syntax) and applying them to a trajectory."""
+"""Choosing metrics (spec syntax), applying them to a trajectory, and the sampling they need."""
 from __future__ import annotations
 
 from gnibench.suite.cell.spec import parse_item, parse_problem
@@ -14,7 +14,11 @@ def parse_metric(text: str) -> MetricChoice:
     if name not in METRICS:
         raise unknown("metric", name, METRICS)
     metric = METRICS[name]
-    return MetricChoice(metric, bind(metric.params, given, f"metric {name}"))
+    values = bind(metric.params, given, f"metric {name}")
+    bad = metric.validate(values) if metric.validate is not None else ""
+    if bad:
+        raise UserError(f"metric {name}: {bad}")
+    return MetricChoice(metric, values)
 
 
 def parse_metrics(texts) -> tuple[MetricChoice, ...]:
@@ -22,10 +26,11 @@ def parse_metrics(texts) -> tuple[MetricChoice, ...]:
     if isinstance(texts, str):
         texts = _split(texts)
     choices = tuple(parse_metric(t) for t in texts)
-    ids = [c.text() for c in choices]
+    ids = [c.metric.id for c in choices]
     for i, x in enumerate(ids):
         if x in ids[:i]:
-            raise UserError(f"metric {x!r} chosen twice; allowed: each metric once")
+            raise UserError(f"metric {x!r} chosen twice; allowed: each metric once (one choice "
+                            f"takes lists, e.g. growth:of=H/L/global)")
     return choices
 
 
@@ -51,23 +56,61 @@ def selected(choices=()) -> list[MetricChoice]:
     return defaults + chosen
 
 
-def apply(traj, choices=(), problem=None) -> tuple[MetricOutput, dict[str, str]]:
+def apply(traj, choices=(), problem=None, families: bool = True) -> tuple[MetricOutput,
+                                                                          dict[str, str]]:
     """Compute the default and chosen metrics of one trajectory.
 
     ``problem`` is the parsed problem; by default it is parsed back from the trajectory's
     canonical spec. Returns the merged outputs and, for each chosen metric that does not apply,
     why (default metrics that do not apply are skipped silently, e.g. global error without a
-    reference).
+    reference). A family metric never applies to one trajectory: with ``families`` it is reported
+    as such (``gnibench solve``), without it is left silently to the runner, which computes it
+    across cells.
     """
     if problem is None:
         problem = parse_problem(traj.problem)
     out, skipped = MetricOutput(), {}
     explicit = {c.metric.id for c in choices}
     for choice in selected(choices):
-        why = choice.metric.why_not(traj, problem)
+        if choice.metric.scope == "family" and not families:
+            continue
+        why = choice.metric.why_not(traj, problem, choice.values)
         if why:
             if choice.metric.id in explicit:
                 skipped[choice.text()] = why
             continue
         out.update(choice.metric.compute(traj, problem, choice.values))
     return out, skipped
+
+
+def not_applicable(choices, problem) -> dict[str, str]:
+    """For each chosen metric that cannot apply to any cell of ``problem`` (a parsed problem),
+    why; metrics that may apply (their trajectory checks come later) are left out."""
+    out = {}
+    for choice in choices:
+        why = choice.metric.problem_why_not(problem, choice.values)
+        if why:
+            out[choice.text()] = why
+    return out
+
+
+def sampling_needs(choices, problem) -> dict[str, float]:
+    """How a cell must be sampled for its chosen metrics: ``{"dt_out": T}`` when a metric needs
+    samples at whole periods t = nT (η(nT), [B] §5.2) and the problem has a period T; else ``{}``.
+
+    The driver facade's ``dt_out`` grid (or, for a fixed-step method whose h divides T, ``every``
+    = :func:`steps_per_period`) gives those samples; a metric that finds none says so. T is the
+    period in t, also for a transformed problem (K-S), whose integration variable is not t (see
+    :mod:`gnibench.suite.metrics.position_in_orbit`).
+    """
+    period = getattr(problem.record, "period", None)
+    if period is None or not any("period" in c.metric.needs for c in choices):
+        return {}
+    return {"dt_out": float(period(problem.values))}
+
+
+def steps_per_period(h: float, period: float, rtol: float = 1e-9) -> int | None:
+    """N when N steps of h make one period T (to ``rtol``), else None: ``every = N`` then samples
+    a fixed-step cell at every whole period."""
+    n = round(period / h)
+    return n if n >= 1 and abs(n * h - period) <= rtol * period else None

@@ -63,9 +63,9 @@ def run_cell(cell, report: Callable[[int, float], None] | None = None) -> CellOu
         with np.errstate(all="ignore"):     # overflow in a diverging cell is a status, not noise
             traj = solve(cell.problem_spec, cell.method_spec, steps=cell.steps,
                          t_end=cell.t_end, every=cell.every, progress=progress)
-            metrics, _ = apply(traj, parse_metrics(cell.metrics))
+            metrics, skipped = apply(traj, parse_metrics(cell.metrics), families=False)
             samples = cell_samples(cell, traj, metrics)
-            row = cell_row(cell, traj, metrics)
+            row = cell_row(cell, traj, metrics, skipped=skipped)
     except Exception as e:  # noqa: BLE001 - any failure of one cell is recorded, the run goes on
         reason = f"{type(e).__name__}: {e}".replace("\n", " ")
         return CellOutcome(cell, str(Status.ERROR), reason, None,

@@ -9,6 +9,7 @@ An experiment is a TOML file, given by path or by the name of one shipped in
     description = "..."              # optional; (choice) notes go here
     t_end = 10.0                     # default horizon of every group: t_end OR steps
     every = 1                        # default sampling: a sample every K steps (plus the last)
+    metrics = ["growth:of=H"]        # optional: metrics beside the defaults (gnibench list metrics)
 
     [[cells]]                        # a group; the cells are problems x methods x vary values
     label    = "symplectic Euler"    # optional, shown in the summary
@@ -16,6 +17,7 @@ An experiment is a TOML file, given by path or by the name of one shipped in
     methods  = ["symplectic-euler:h=0.3"]
     steps = 100                      # optional: replaces the top-level horizon for this group
     every = 1                        # optional
+    metrics = ["precession"]         # optional: replaces the top-level metrics for this group
     vary.h = [0.3, 0.15]             # a base-method option, one cell per value
     vary.problem.p0 = [0.7, 1.4]     # a problem option
     vary.observer.theta = [1, 15]    # an option of a modifier (only methods that have it)
@@ -24,8 +26,11 @@ A ``vary`` value overrides the same option written in a spec. Values are numbers
 booleans, or lists of numbers (written ``a/b`` in the spec). The cells of a group are the product
 problems x vary.problem x methods x (method vary keys), in that order, numbered from 0 across
 the groups. Every cell is checked before any runs (unknown keys, specs through
-:func:`gnibench.suite.cell.solve.prepare`, horizons, sample counts, duplicates); a bad one raises
-:class:`~gnibench.suite.foundation.errors.UserError` naming the place and what is allowed.
+:func:`gnibench.suite.cell.solve.prepare`, horizons, sample counts, duplicates, metric specs, and
+that each chosen metric may apply to at least one cell of its group); a bad one raises
+:class:`~gnibench.suite.foundation.errors.UserError` naming the place and what is allowed. A metric
+that applies to some cells of a group only is computed where it applies; the others say why in
+``cells.parquet`` (``metric_notes``).
 """
 from __future__ import annotations
 
@@ -42,8 +47,9 @@ from gnibench.suite.foundation.budgets import INT_LIMIT, check_count
 from gnibench.suite.foundation.errors import UserError, unknown
 from gnibench.suite.foundation.params import format_float
 
-TOP_KEYS = ("name", "title", "reference", "description", "t_end", "steps", "every", "cells")
-GROUP_KEYS = ("label", "problems", "methods", "t_end", "steps", "every", "vary")
+TOP_KEYS = ("name", "title", "reference", "description", "t_end", "steps", "every", "metrics",
+            "cells")
+GROUP_KEYS = ("label", "problems", "methods", "t_end", "steps", "every", "metrics", "vary")
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]*$")
 
 
@@ -52,7 +58,8 @@ class Cell:
     """One problem x method x horizon: the unit of work of the runner.
 
     ``problem_spec``/``method_spec`` are the texts given to :func:`gnibench.suite.cell.solve.solve`;
-    ``problem``/``method`` are their canonical texts (what the tables show).
+    ``problem``/``method`` are their canonical texts (what the tables show); ``metrics`` the
+    canonical texts of the chosen metrics (beside the default ones).
     """
 
     id: int
@@ -133,6 +140,7 @@ def parse_experiment(text: str, source: str) -> Experiment:
     defaults = {k: doc[k] for k in ("t_end", "steps", "every") if k in doc}
     planned = sum(_planned_cells(g, f"{source}: cells[{gi}]") for gi, g in enumerate(groups))
     check_count(planned, f"{source}", "GNIBENCH_MAX_CELLS", "cells")
+    defaults["metrics"] = _metrics(doc, source)
     cells: list[Cell] = []
     for gi, group in enumerate(groups):
         cells.extend(_expand(group, gi, defaults, f"{source}: cells[{gi}]", len(cells)))
@@ -234,6 +242,34 @@ def _value_text(value, where: str) -> str:
                     "or a list of numbers")
 
 
+def _metrics(table: dict, where: str) -> tuple[str, ...] | None:
+    """The canonical texts of a ``metrics`` list (None when the key is absent)."""
+    from gnibench.suite.metrics.compute import parse_metrics
+
+    if "metrics" not in table:
+        return None
+    value = table["metrics"]
+    if not isinstance(value, list) or not all(isinstance(m, str) for m in value):
+        raise UserError(f"{where}: bad metrics = {value!r}; allowed: a list of metric spec "
+                        "strings, e.g. [\"eta\", \"growth:of=H\"] (gnibench list metrics)")
+    try:
+        return tuple(c.text() for c in parse_metrics(value))
+    except UserError as e:
+        raise UserError(f"{where}: metrics: {e}") from None
+
+
+def _check_metrics(metrics: tuple[str, ...], problems: list, where: str) -> None:
+    """Each chosen metric must be able to apply to at least one problem of the group."""
+    from gnibench.suite.metrics.compute import not_applicable, parse_metrics
+
+    choices = parse_metrics(list(metrics))
+    reasons = [not_applicable(choices, p) for p in problems]
+    for c in choices:
+        if all(c.text() in r for r in reasons):
+            why = "; ".join(dict.fromkeys(r[c.text()] for r in reasons))
+            raise UserError(f"{where}: metric {c.text()} applies to no cell of the group: {why}")
+
+
 def _vary(group: dict, where: str) -> tuple[list[tuple[str, str, list[str]]], ...]:
     """(target, option, [value texts]) triples: target is 'problem', 'method' or a modifier id."""
     vary = group.get("vary", {})
@@ -278,6 +314,8 @@ def _expand(group: dict, gi: int, defaults: dict, where: str, first_id: int) -> 
     problems = _spec_list(group, "problems", where)
     methods = _spec_list(group, "methods", where)
     steps, t_end, every = _horizon(group, defaults, where)
+    metrics = _metrics(group, where)
+    metrics = (defaults.get("metrics") or ()) if metrics is None else metrics
     problem_vary, method_vary = _vary(group, where)
     for target, opt, _ in method_vary:
         modifiers = {part.partition(":")[0].strip() for m in methods for part in split_method(m)[1:]}
@@ -285,6 +323,7 @@ def _expand(group: dict, gi: int, defaults: dict, where: str, first_id: int) -> 
             raise UserError(f"{where}: vary.{target}.{opt}: no method of the group has the "
                             f"modifier {target!r}")
     cells = []
+    parsed_problems = []
     for pgiven, *pvals in itertools.product(problems, *[v[2] for v in problem_vary]):
         for mgiven, *mvals in itertools.product(methods, *[v[2] for v in method_vary]):
             here = f"{where}: {pgiven} {mgiven}"
@@ -293,6 +332,7 @@ def _expand(group: dict, gi: int, defaults: dict, where: str, first_id: int) -> 
                 mspec = _apply(mgiven, method_vary, mvals)
                 here = f"{where}: {pspec} {mspec}"
                 problem, method = prepare(pspec, mspec)
+                parsed_problems.append(problem)
                 h = grid_step(method)
                 nsteps, h_last = grid(h, steps, t_end)
                 check_budgets(problem, method, steps, t_end, every, None)
@@ -300,7 +340,8 @@ def _expand(group: dict, gi: int, defaults: dict, where: str, first_id: int) -> 
                 raise UserError(f"{here}: {e}") from None
             cells.append(Cell(first_id + len(cells), gi, label, pspec, mspec, problem.text(),
                               method.text(), h, steps, t_end, every, nsteps,
-                              (nsteps - 1) * h + h_last))
+                              (nsteps - 1) * h + h_last, metrics))
+    _check_metrics(metrics, parsed_problems, where)
     return cells
 
 

@@ -15,6 +15,12 @@ under the key ``gnibench``; ``samples`` and ``cells`` carry nothing that depends
 time, no executor, no worker count), so they are byte-identical for the same inputs, also after
 an interrupted run was resumed.
 
+Metrics: each cell's chosen metrics (``Cell.metrics``) are applied to its trajectory in
+:func:`~gnibench.suite.runs.cellwork.run_cell`; metrics across cells (``order``: families of cells
+that differ only in h) are computed at each consolidation from the cells and samples tables alone
+(:func:`gnibench.suite.metrics.families.family_columns`), so they do not depend on where or in
+which order the cells ran.
+
 Resuming: running the same command again reuses every stored cell whose key matches (spec, code
 and versions; :func:`gnibench.suite.runs.store.cell_key`) and computes only the others; ``fresh``
 ignores the store. The consolidated tables are rewritten after a cell finishes whenever the time
@@ -126,6 +132,7 @@ class Consolidator:
         return time.perf_counter() - self.last_write >= FLUSH_RATIO * self.write_cost
 
     def flush(self, done: set) -> None:
+        from gnibench.suite.metrics.families import family_columns
         from gnibench.suite.runs.storage import write_parquet
         from gnibench.suite.runs.tables import (
             cell_row,
@@ -146,7 +153,9 @@ class Consolidator:
         rows = [parts[c.id].row if c.id in parts else cell_row(c) for c in cells]
         timings = [parts[c.id].timing if c.id in parts else timing_row(c) for c in cells]
         meta = provenance(self.experiment, len(parts))
-        cells_df, timings_df = cells_table(rows), timings_table(timings)
+        # metrics across cells (families equal but for h): a function of the two tables only
+        cells_df = family_columns(cells_table(rows), samples)
+        timings_df = timings_table(timings)
         write_parquet(samples, out / "samples.parquet", {**meta, "table": "samples"})
         write_parquet(cells_df, out / "cells.parquet", {**meta, "table": "cells"})
         write_parquet(timings_df, out / "timings.parquet",

@@ -65,14 +65,21 @@ def cell_samples(cell, traj, metrics) -> pd.DataFrame:
     return df
 
 
-def cell_row(cell, traj=None, metrics=None, status: str = "pending", reason: str = "") -> dict:
-    """The summary row of one cell; without a trajectory, the row of a cell that did not finish."""
+def cell_row(cell, traj=None, metrics=None, status: str = "pending", reason: str = "",
+             skipped: dict | None = None) -> dict:
+    """The summary row of one cell; without a trajectory, the row of a cell that did not finish.
+
+    ``skipped`` maps each chosen metric that did not apply to why (``metric_notes``)."""
+    from gnibench.suite.metrics.families import join_metrics
+
+    notes = "; ".join(f"{k}: {v}" for k, v in (skipped or {}).items())
     row = {"cell": cell.id, "group": cell.group, "label": cell.label, "problem": cell.problem,
            "method": cell.method, "h": cell.h,
            "t_end": np.nan if cell.t_end is None else cell.t_end,
            "steps_planned": cell.nsteps, "every": cell.every, "status": status, "reason": reason,
            "steps": None, "t_final": np.nan, "nfev": np.nan, "njev": np.nan, "samples": None,
-           "integrals": "", "final_global_error": np.nan, "max_global_error": np.nan}
+           "integrals": "", "metrics": join_metrics(cell.metrics), "metric_notes": notes,
+           "final_global_error": np.nan, "max_global_error": np.nan}
     if traj is None:
         return row
     last = len(traj.t) - 1
@@ -126,7 +133,7 @@ def samples_table(parts: list[tuple[pd.DataFrame, tuple[str, ...]]],
 
 _CELL_COLUMNS = ("cell", "group", "label", "problem", "method", "h", "t_end", "steps_planned",
                  "every", "status", "reason", "steps", "t_final", "nfev", "njev", "samples",
-                 "integrals")
+                 "integrals", "metrics", "metric_notes")
 
 
 def cells_table(rows: list[dict]) -> pd.DataFrame:
