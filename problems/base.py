@@ -8,6 +8,7 @@ structure. Exact solutions, where known, are plain numpy functions of the same r
 """
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -176,7 +177,11 @@ class Problem:
         """The problem's characteristic time (``time_scale``, default 1: the catalog's units make
         the motion of order one per unit time). Default step sizes and output intervals are 0.01
         of it, so a problem in days (the outer solar system) does not get 0.01-day defaults."""
-        return 1.0 if self.time_scale is None else float(self.time_scale(values))
+        if self.time_scale is not None:
+            return float(self.time_scale(values))
+        if self.period is not None:                   # 1/frequency: 1 for the catalog orbits
+            return float(f"{self.period(values) / (2 * math.pi):.2g}")
+        return 1.0
 
     def par(self, values: dict) -> tuple[float, ...]:
         """The run-time parameter tuple for the compiled code (model parameters, in order)."""
