@@ -37,6 +37,7 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 from gnibench.suite.foundation.cache import atomic_write
 from gnibench.suite.foundation.provenance import versions
 from gnibench.suite.runs import executors
@@ -58,7 +59,8 @@ def run_experiment(name_or_path, out_dir=None, *, jobs: int | None = None,
     name_or_path:
         Name of a shipped experiment (``quick``) or path to a TOML file.
     out_dir:
-        Output directory; default ``results/<experiment name>`` in the working directory.
+        Output directory; default ``results/<experiment name>`` in the working directory. It
+        holds the store (``parts/``) too.
     jobs, executor, scheduler:
         Where the cells run (:mod:`gnibench.suite.runs.executors`): ``local`` with ``jobs``
         processes (default: the number of cores; 1: in this process), or ``dask`` (a
@@ -74,35 +76,58 @@ def run_experiment(name_or_path, out_dir=None, *, jobs: int | None = None,
     experiment = load_experiment(name_or_path)
     executors.check(executor, jobs, scheduler)
     out = Path(out_dir) if out_dir is not None else Path("results") / experiment.name
+    run_experiments([experiment], [out], out, jobs=jobs, executor=executor, scheduler=scheduler,
+                    fresh=fresh, log=log, summarize=summarize, name=experiment.name)
+    return out
+
+
+def run_experiments(experiments: list[Experiment], outs: list[Path], store_root: Path, *,
+                    jobs: int | None = None, executor: str = "local",
+                    scheduler: str | None = None, fresh: bool = False, log=None,
+                    summarize=None, name: str = "run") -> list[Path]:
+    """Run several validated experiments over one store: a cell shared by several experiments
+    (same key) is computed once; each experiment's tables are consolidated into its own
+    directory (``outs``, in order). Executor options must have been checked."""
     log = sys.stderr if log is None else log
-    with Store(out) as store:
-        keys = {c.id: cell_key(c) for c in experiment.cells}
-        done = set() if fresh else {c.id for c in experiment.cells if store.read(keys[c.id])}
-        todo = [c for c in experiment.cells if c.id not in done]
-        n = len(experiment.cells)
-        print(f"gnibench: {experiment.name}: {n} cells -> {out} ({len(done)} reused from the "
+    outs = [Path(o) for o in outs]
+    with Store(store_root) as store:
+        for out in outs:
+            Store.make_output_dir(out)
+        writers = [Consolidator(e, store, out, summarize) for e, out in zip(experiments, outs)]
+        unique: dict[str, object] = {}
+        for w in writers:
+            for c in w.experiment.cells:
+                unique.setdefault(w.keys[c.id], c)
+        done = set() if fresh else {k for k in unique if store.read(k)}
+        todo = [c for k, c in unique.items() if k not in done]
+        key_of = {id(c): k for k, c in unique.items()}
+        where = outs[0] if len(outs) == 1 else store_root
+        print(f"gnibench: {name}: {len(unique)} cells -> {where} ({len(done)} reused from the "
               f"store, {len(todo)} to compute)", file=log, flush=True)
-        writer = Consolidator(experiment, store, keys, summarize)
-        progress = RunProgress(n, len(done), log, experiment.name)
+        progress = RunProgress(len(unique), len(done), log, name)
         try:
-            groups = _groups(todo)
-            for outcome in executors.run(groups, executor, jobs, scheduler,
+            for outcome in executors.run(_groups(todo), executor, jobs, scheduler,
                                          progress.cell_progress):
-                store.write(keys[outcome.cell.id], _part(outcome), writer.empty_samples)
-                done.add(outcome.cell.id)
+                key = key_of.get(id(outcome.cell)) or cell_key(outcome.cell)
+                store.write(key, _part(outcome), writers[0].empty_samples)
+                done.add(key)
                 progress.cell_done(outcome)
-                if writer.due():
-                    writer.flush(done)
+                for w in writers:
+                    if w.due():
+                        w.flush(done)
         except KeyboardInterrupt:
             progress.close()
-            writer.flush(done)
-            print(f"gnibench: interrupted: {len(done)} of {n} cells are stored in {out}; run the "
-                  f"same command again to compute the rest", file=log, flush=True)
+            for w in writers:
+                w.flush(done)
+            print(f"gnibench: interrupted: {len(done)} of {len(unique)} cells are stored in "
+                  f"{store_root}; run the same command again to compute the rest", file=log,
+                  flush=True)
             raise
         finally:
             progress.close()
-        writer.flush(done)
-    return out
+        for w in writers:
+            w.flush(done)
+    return outs
 
 
 def _groups(cells) -> list[list]:
@@ -120,10 +145,11 @@ def _part(o: CellOutcome) -> Part:
 class Consolidator:
     """Writes the consolidated tables (and the summary) from the stored parts."""
 
-    def __init__(self, experiment: Experiment, store: Store, keys: dict, summarize=None):
+    def __init__(self, experiment: Experiment, store: Store, out: Path, summarize=None):
         from gnibench.suite.runs.tables import samples_table
 
-        self.experiment, self.store, self.keys, self.summarize = experiment, store, keys, summarize
+        self.experiment, self.store, self.out, self.summarize = experiment, store, out, summarize
+        self.keys = {c.id: cell_key(c) for c in experiment.cells}
         self.state_names = experiment_states(experiment)
         self.empty_samples = samples_table([])
         self.last_write, self.write_cost = time.perf_counter(), 0.0
@@ -143,9 +169,9 @@ class Consolidator:
         )
 
         t0 = time.perf_counter()
-        out = self.store.out
-        parts = {c.id: self.store.read(self.keys[c.id]) for c in self.experiment.cells
-                 if c.id in done}
+        out = self.out
+        parts = {c.id: restamp(self.store.read(self.keys[c.id]), c) for c in self.experiment.cells
+                 if self.keys[c.id] in done}
         parts = {k: p for k, p in parts.items() if p is not None}
         samples = samples_table([(p.samples, p.state_names) for p in parts.values()
                                  if p.samples is not None], self.state_names)
@@ -166,6 +192,18 @@ class Consolidator:
             atomic_write(out / "summary.md", lambda p: Path(p).write_text(text, encoding="utf-8"))
         self.last_write = time.perf_counter()
         self.write_cost = self.last_write - t0
+
+
+def restamp(part: Part | None, cell) -> Part | None:
+    """A stored part as a cell of this experiment: its id, group and label (a part is keyed by
+    what determines its numbers, so one part may serve cells of several experiments)."""
+    if part is None:
+        return None
+    part.row.update(cell=cell.id, group=cell.group, label=cell.label)
+    part.timing.update(cell=cell.id)
+    if part.samples is not None:
+        part.samples["cell"] = np.int64(cell.id)
+    return part
 
 
 def experiment_states(experiment: Experiment) -> tuple[str, ...]:

@@ -122,6 +122,19 @@ class Store:
         self.clean_temporary()
         return self
 
+    @staticmethod
+    def make_output_dir(out: Path) -> None:
+        """Create an output directory (a one-line UserError if it cannot be one)."""
+        out = Path(out)
+        if out.exists() and not out.is_dir():
+            raise UserError(f"bad -o {out}: it exists and is not a directory")
+        try:
+            out.mkdir(parents=True, exist_ok=True)
+        except OSError as e:
+            raise UserError(f"bad -o {out}: cannot create the directory ({e.strerror})") from None
+        if not os.access(out, os.W_OK):
+            raise UserError(f"bad -o {out}: the directory is not writable")
+
     def close(self) -> None:
         if self._lock_file is not None:
             fcntl.flock(self._lock_file.fileno(), fcntl.LOCK_UN)
