@@ -55,7 +55,7 @@ def _stormer_verlet(ctx) -> str:
             "\n@njit(cache=True)\ndef step(y, h, par, ws):\n"
             "    # [HLW] (1.17) = adjoint(h/2) o symplectic Euler(h/2)\n"
             "    y1, n1, j1, s1 = pstep_u(y, 0.5 * h, par, ws[0])\n"
-            "    if s1 != 0:\n        return y, n1, j1, s1\n"
+            "    if s1 != STATUS_OK:\n        return y, n1, j1, s1\n"
             "    y2, n2, j2, s2 = pstep_v(y1, 0.5 * h, par, ws[1])\n"
             "    return y2, n1 + n2, j1 + j2, s2\n")
 

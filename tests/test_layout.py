@@ -8,8 +8,9 @@ Floors, from the ground up (README, "Layout"; ``suite/__init__.py``)::
     3 gnibench.suite.cell         specs, code generation, the driver facade, solve, sections, references
     4 gnibench.suite.metrics      measurements of a trajectory
     5 gnibench.suite.runs         experiments, runner, tables, storage, bench
-    6 gnibench.reports            reports from tables
-    7 gnibench.suite.cli          the command line
+    6 gnibench.suite.ledger       the claims ledger: entries, closed forms, identity checks, verdicts
+    7 gnibench.reports            reports from tables
+    8 gnibench.suite.cli          the command line
 
 A module may import from its own floor or below. Every import counts, also those made inside a
 function (they are for start-up time only, never to dodge a circle).
@@ -31,8 +32,9 @@ FLOORS = (
     ("gnibench.suite.cell", 3),
     ("gnibench.suite.metrics", 4),
     ("gnibench.suite.runs", 5),
-    ("gnibench.reports", 6),
-    ("gnibench.suite.cli", 7),
+    ("gnibench.suite.ledger", 6),
+    ("gnibench.reports", 7),
+    ("gnibench.suite.cli", 8),
 )
 # package markers with no code of their own (docstrings, the version)
 NEUTRAL = {"gnibench", "gnibench.suite"}

@@ -102,6 +102,18 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--fresh", action="store_true",
                    help="ignore the cells stored by earlier runs in the output directory")
 
+    v = sub.add_parser("verify", help="check the claims of [B] and [HLW] against our measurements")
+    v.add_argument("claims", nargs="*", metavar="ID", help="claim ids (default: all)")
+    v.add_argument("--list", action="store_true", help="list the claims without running them")
+    v.add_argument("--scale", default="quick", metavar="quick|paper",
+                   help="quick (short horizons) or paper (the seeds' own)")
+    v.add_argument("--format", default="text", metavar="text|json")
+    v.add_argument("-o", "--output", type=_path, default=None,
+                   help="output directory (default: results/verify)")
+    v.add_argument("-j", "--jobs", type=int, default=None, metavar="N")
+    v.add_argument("--executor", default="local", metavar="local|dask")
+    v.add_argument("--scheduler", metavar="ADDRESS")
+
     b = sub.add_parser("bench", help="time kernels in ns/step against a C loop")
     b.add_argument("--steps", type=int, default=2_000_000)
     b.add_argument("--no-c", action="store_true", help="skip the gcc -O3 reference loop")
@@ -178,7 +190,12 @@ def _bench(a) -> int:
 def main(argv=None) -> int:
     try:
         a = _parser().parse_args(argv)
-        return {"solve": _solve, "list": _list, "run": _run, "bench": _bench}[a.command](a)
+        commands = {"solve": _solve, "list": _list, "run": _run, "bench": _bench}
+        if a.command == "verify":
+            from gnibench.suite.cli.verify import verify_command
+
+            return verify_command(a)
+        return commands[a.command](a)
     except UserError as e:
         print(f"gnibench: error: {e}", file=sys.stderr)
         return 2

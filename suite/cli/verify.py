@@ -1,0 +1,98 @@
+"""``gnibench verify [ID...|all] [--scale quick|paper] [-j N] [--list] [--format json] [-o DIR]``.
+
+Runs what the chosen claims need (through the runner: parallel, resumable, one store under
+``DIR/store``), judges each claim from the tables, prints the verdict per claim with the measured
+number beside the seed's, writes ``DIR/ledger.parquet`` and ``DIR/ledger.md``, and exits with 1
+when a verdict differs from its ``expected`` one (a known failure that starts to pass, or the
+reverse), else 0.
+"""
+from __future__ import annotations
+
+import json
+import math
+import sys
+from pathlib import Path
+
+from gnibench.suite.foundation.errors import UserError
+
+SCALES = ("quick", "paper")
+
+
+def verify_command(a) -> int:
+    from gnibench.suite.ledger.verify import needed_experiments, select_claims
+
+    if a.scale not in SCALES:
+        raise UserError(f"bad --scale {a.scale!r}; allowed: {', '.join(SCALES)}")
+    if a.format not in ("text", "json"):
+        raise UserError(f"bad --format {a.format!r}; allowed: text, json")
+    claims = select_claims(a.claims)
+    if a.list:
+        for c in claims:
+            print(f"{c.id:<24} {c.kind}  {c.how:<14} {c.experiment or c.check or '-':<22} "
+                  f"expected {c.expected}  {c.citation}")
+        return 0
+    from gnibench.suite.runs import executors
+
+    executors.check(a.executor, a.jobs, a.scheduler)
+    out = a.output if a.output is not None else Path("results") / "verify"
+    experiments = _load(needed_experiments(claims, a.scale), a.scale)
+    dirs = _run(experiments, out, a)
+    return _judge(claims, dirs, out, a)
+
+
+def _load(names: list[str], scale: str) -> list:
+    from gnibench.suite.runs.experiment import load_experiment
+
+    return [load_experiment(name) for name in names]
+
+
+def _run(experiments, out: Path, a) -> dict[str, Path]:
+    from gnibench.suite.runs.runner import run_experiments
+
+    outs = [out / e.name for e in experiments]
+    if experiments:
+        run_experiments(experiments, outs, out / "store", jobs=a.jobs, executor=a.executor,
+                        scheduler=a.scheduler, name="verify")
+    return {e.name: o for e, o in zip(experiments, outs)}
+
+
+def _judge(claims, dirs, out: Path, a) -> int:
+    from gnibench.reports.ledger import render_ledger
+    from gnibench.suite.foundation.cache import atomic_write
+    from gnibench.suite.foundation.provenance import versions
+    from gnibench.suite.ledger.verdicts import Results
+    from gnibench.suite.ledger.verify import judge, ledger_table, write_ledger
+
+    verdicts = judge(claims, Results(dirs), a.scale)
+    meta = {"scale": a.scale, "versions": versions(),
+            "experiments": {k: str(v) for k, v in dirs.items()}}
+    write_ledger(verdicts, out, meta)
+    text = render_ledger(ledger_table(verdicts), meta)
+    atomic_write(out / "ledger.md", lambda p: Path(p).write_text(text, encoding="utf-8"))
+    if a.format == "json":
+        rows = [{"id": v.id, "citation": v.citation, "verdict": v.verdict,
+                 "expected": v.expected, "measured": _jsonable(v.measured),
+                 "seed_value": v.seed_value, "threshold": v.threshold, "figure": v.figure,
+                 "detail": v.detail} for v in verdicts]
+        print(json.dumps(rows, indent=1))
+    else:
+        for v in verdicts:
+            flag = "  UNEXPECTED" if v.unexpected else ""
+            measured = v.row()["measured_text"]
+            print(f"{v.id:<24} {v.verdict:<15} measured {measured or '-':<14} seed: "
+                  f"{v.seed_value or '-'}{'  [' + v.figure + ']' if v.figure else ''}{flag}")
+    unexpected = [v.id for v in verdicts if v.unexpected]
+    counts = {k: sum(v.verdict == k for v in verdicts) for k in
+              ("reproduced", "partly", "not reproduced", "not checkable")}
+    print(f"gnibench: verify: {len(verdicts)} claims: "
+          + ", ".join(f"{n} {k}" for k, n in counts.items())
+          + f"; {len(unexpected)} differ from the expected verdict; ledger in {out}",
+          file=sys.stderr)
+    return 1 if unexpected else 0
+
+
+def _jsonable(x):
+    if isinstance(x, float) or hasattr(x, "item"):
+        x = float(x)
+        return x if math.isfinite(x) else str(x)
+    return x
