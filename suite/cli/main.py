@@ -28,6 +28,11 @@ def _parser() -> argparse.ArgumentParser:
     g.add_argument("--steps", type=int, help="number of steps N")
     g.add_argument("--t-end", type=float, help="final time T (last step shortened to land on T)")
     s.add_argument("--every", type=int, default=1, help="sample every K steps (plus the final point)")
+    s.add_argument("--dt-out", type=float, metavar="D",
+                   help="sample at t = k*D (every K-th point with --every K) plus the final point, "
+                        "located exactly for every compiled method: dense output (dopri5, dop853) "
+                        "or a partial step of the method from the last step; the steps are those "
+                        "taken without it (suite/cell/timegrid.py)")
     s.add_argument("--format", choices=("csv", "json", "parquet"), default="csv")
     s.add_argument("-o", "--output", type=Path, help="output file (default: stdout)")
     s.add_argument("--reference", metavar="REF",
@@ -72,8 +77,11 @@ def _solve(a) -> int:
         if a.reference is not None:
             raise UserError("--reference does not apply with --section (no global error is "
                             "written)")
+        if a.dt_out is not None:
+            raise UserError("--dt-out does not apply with --section (the section points are "
+                            "written)")
     traj = solve(a.problem, a.method, steps=a.steps, t_end=a.t_end, every=a.every,
-                 reference=a.reference, section=a.section)
+                 reference=a.reference, section=a.section, dt_out=a.dt_out)
     metrics, skipped = apply(traj, choices)
     write_result(traj, metrics, a.format, a.output, sys.stdout)
     for name, why in skipped.items():

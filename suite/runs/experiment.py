@@ -9,6 +9,7 @@ An experiment is a TOML file, given by path or by the name of one shipped in
     description = "..."              # optional; (choice) notes go here
     t_end = 10.0                     # default horizon of every group: t_end OR steps
     every = 1                        # default sampling: a sample every K steps (plus the last)
+    dt_out = 0.5                     # optional: samples at t = k dt_out (every K-th) plus the last
 
     [[cells]]                        # a group; the cells are problems x methods x vary values
     label    = "symplectic Euler"    # optional, shown in the summary
@@ -16,6 +17,7 @@ An experiment is a TOML file, given by path or by the name of one shipped in
     methods  = ["symplectic-euler:h=0.3"]
     steps = 100                      # optional: replaces the top-level horizon for this group
     every = 1                        # optional
+    dt_out = 0.5                     # optional: replaces the top-level time grid for this group
     vary.h = [0.3, 0.15]             # a base-method option, one cell per value
     vary.problem.p0 = [0.7, 1.4]     # a problem option
     vary.observer.theta = [1, 15]    # an option of a modifier (only methods that have it)
@@ -41,8 +43,9 @@ from gnibench.suite.cell.spec import parse_item, split_method
 from gnibench.suite.foundation.errors import UserError, unknown
 from gnibench.suite.foundation.params import format_float
 
-TOP_KEYS = ("name", "title", "reference", "description", "t_end", "steps", "every", "cells")
-GROUP_KEYS = ("label", "problems", "methods", "t_end", "steps", "every", "vary")
+TOP_KEYS = ("name", "title", "reference", "description", "t_end", "steps", "every", "dt_out",
+            "cells")
+GROUP_KEYS = ("label", "problems", "methods", "t_end", "steps", "every", "dt_out", "vary")
 MAX_SAMPLES = 10_000_000      # rows per cell: beyond this, ask for a larger `every`
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]*$")
 
@@ -69,6 +72,7 @@ class Cell:
     nsteps: int
     t_final: float
     metrics: tuple[str, ...] = ()
+    dt_out: float | None = None     # time grid (suite/cell/timegrid.py); the specs stay as given
 
 
 @dataclass(frozen=True)
@@ -124,13 +128,13 @@ def parse_experiment(text: str, source: str) -> Experiment:
     groups = doc.get("cells")
     if not isinstance(groups, list) or not groups or not all(isinstance(g, dict) for g in groups):
         raise UserError(f"{source}: needs at least one [[cells]] group")
-    defaults = {k: doc[k] for k in ("t_end", "steps", "every") if k in doc}
+    defaults = {k: doc[k] for k in ("t_end", "steps", "every", "dt_out") if k in doc}
     cells: list[Cell] = []
     for gi, group in enumerate(groups):
         cells.extend(_expand(group, gi, defaults, f"{source}: cells[{gi}]", len(cells)))
     seen: dict[tuple, int] = {}
     for c in cells:
-        key = (c.problem, c.method, c.steps, c.t_end, c.every)
+        key = (c.problem, c.method, c.steps, c.t_end, c.every, c.dt_out)
         if key in seen:
             raise UserError(f"{source}: cell {c.id} ({c.problem} {c.method}) duplicates cell "
                             f"{seen[key]}; allowed: each cell once")
@@ -181,6 +185,17 @@ def _horizon(group: dict, defaults: dict, where: str) -> tuple[int | None, float
         t_end = float(t_end)
     every = _integer(group.get("every", defaults.get("every", 1)), "every", where)
     return steps, t_end, every
+
+
+def _dt_out(group: dict, defaults: dict, where: str) -> float | None:
+    """The time grid of a group (its own dt_out replaces the top-level one)."""
+    value = group.get("dt_out", defaults.get("dt_out"))
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not (
+            math.isfinite(value) and value > 0):
+        raise UserError(f"{where}: bad dt_out = {value!r}; allowed: a finite number > 0")
+    return float(value)
 
 
 def _integer(value, key: str, where: str) -> int:
@@ -243,12 +258,14 @@ def with_options(spec: str, target: str, options: dict[str, str]) -> str:
 def _expand(group: dict, gi: int, defaults: dict, where: str, first_id: int) -> list[Cell]:
     from gnibench.suite.cell.grid import grid, grid_step
     from gnibench.suite.cell.spec import prepare
+    from gnibench.suite.cell.timegrid import effective_dt_out, engine_method
 
     _keys(group, GROUP_KEYS, where)
     label = _text(group, "label", where)
     problems = _spec_list(group, "problems", where)
     methods = _spec_list(group, "methods", where)
     steps, t_end, every = _horizon(group, defaults, where)
+    dt_out = _dt_out(group, defaults, where)
     problem_vary, method_vary = _vary(group, where)
     for target, opt, _ in method_vary:
         modifiers = {part.partition(":")[0].strip() for m in methods for part in split_method(m)[1:]}
@@ -264,17 +281,25 @@ def _expand(group: dict, gi: int, defaults: dict, where: str, first_id: int) -> 
                 mspec = _apply(mgiven, method_vary, mvals)
                 here = f"{where}: {pspec} {mspec}"
                 problem, method = prepare(pspec, mspec)
+                external = getattr(method.base.record, "run", None) is not None
+                if dt_out is not None and external:     # an engine's dt_out is its own grid
+                    method = engine_method(method, dt_out)
+                elif dt_out is not None:
+                    effective_dt_out(method, dt_out)      # refuses a conflicting method option
                 h = grid_step(method)
                 nsteps, h_last = grid(h, steps, t_end)
+                samples = 2 + nsteps // every
+                transformed = problem.record.transformed(problem.values) is not None
+                if dt_out is not None and not external and not transformed:
+                    samples = 2 + grid(dt_out, None, (nsteps - 1) * h + h_last)[0] // every
             except UserError as e:
                 raise UserError(f"{here}: {e}") from None
-            samples = 2 + nsteps // every
             if samples > MAX_SAMPLES:
                 raise UserError(f"{here}: {nsteps} steps sampled every {every} give {samples} "
                                 f"rows; allowed: at most {MAX_SAMPLES} (raise every)")
             cells.append(Cell(first_id + len(cells), gi, label, pspec, mspec, problem.text(),
                               method.text(), h, steps, t_end, every, nsteps,
-                              (nsteps - 1) * h + h_last))
+                              (nsteps - 1) * h + h_last, dt_out=dt_out))
     return cells
 
 

@@ -63,7 +63,7 @@ def run_cell(cell: Cell) -> CellOutcome:
     try:
         with np.errstate(all="ignore"):     # overflow in a diverging cell is a status, not noise
             traj = solve(cell.problem_spec, cell.method_spec, steps=cell.steps,
-                         t_end=cell.t_end, every=cell.every)
+                         t_end=cell.t_end, every=cell.every, dt_out=cell.dt_out)
             metrics, _ = apply(traj, parse_metrics(cell.metrics))
             samples = cell_samples(cell, traj, metrics)
             row = cell_row(cell, traj, metrics)
@@ -177,5 +177,6 @@ class _Writer:
                 "versions": versions(), "complete": ndone == len(e.cells), "cells_done": ndone,
                 "cells_total": len(e.cells),
                 "cells": [{"cell": c.id, "problem": c.problem, "method": c.method,
-                           "steps": c.steps, "t_end": c.t_end, "every": c.every}
+                           "steps": c.steps, "t_end": c.t_end, "every": c.every,
+                           "dt_out": c.dt_out}
                           for c in e.cells]}
