@@ -16,7 +16,11 @@ own module (external engines, transformed problems) it is the base field ``base_
 integrator is DOP853's 8th-order solution (Hairer's coefficients, methods/dop853_coefficients.py)
 with m equal substeps, m doubled from 2 until two successive results agree to HENON_RTOL
 (|z_2m - z_m| <= HENON_RTOL max(1, |z_2m|) componentwise), at most HENON_MAX_SUBSTEPS. The located
-point is on the exact flow of F through (t, y) up to that agreement.
+point is on the exact flow of F through (t, y) up to that agreement. (choice) The substeps are
+summed as the increment z - z0 with compensated (Kahan) summation: plain summation of z loses
+about m/2 ulps, so near tangencies, where m must grow, the two results never agreed to 1e-15 and m
+ran to the cap (measured: 11 of 7298 so(4) crossings at 4096 substeps, none with the compensated
+sum, whose largest m is 1024).
 
 The generator unrolls the 12 stages over the (N+1)-tuple (y, t), skipping zero coefficients, as
 methods/explicit_rk.py unrolls a tableau, so a location allocates nothing. It also writes the
@@ -70,8 +74,9 @@ def henon_source(n: int, field: str = "f") -> str:
     zero = _tup(["0.0"] * n1)
     run = ["\n@njit(cache=True)\ndef henon_run(z0, dg, m, par):",
            "    # m equal DOP853 substeps of the augmented system over dg, accumulated as the",
-           "    # increment dz = z - z0 (rounding then acts on the small increment, not on z)",
-           "    hs = dg / m", f"    dz = {zero}",
+           "    # increment dz = z - z0 by compensated (Kahan) summation: its rounding then neither",
+           "    # acts on z nor grows with m, and results with m and 2m can agree to 1e-15",
+           "    hs = dg / m", f"    dz = {zero}", f"    cz = {zero}",
            "    for _ in range(m):", "        z = henon_lc1(z0, 1.0, 1.0, dz)",
            "        k0 = henon_rhs(z, par)"]
     arities = {1}
@@ -82,11 +87,20 @@ def henon_source(n: int, field: str = "f") -> str:
         run.append(f"        k{i} = henon_rhs(henon_lc{len(terms)}(z, hs, {args}), par)")
     terms = [(B[j], j) for j in range(STAGES) if B[j] != 0.0]
     arities.add(len(terms))
-    run.append(f"        dz = henon_lc{len(terms)}(dz, hs, "
+    run.append(f"        inc = henon_lc{len(terms)}({zero}, hs, "
                + ", ".join(f"{lit(c)}, k{j}" for c, j in terms) + ")")
+    run.append("        dz, cz = henon_kahan(dz, cz, inc)")
     run.append("    return henon_lc1(z0, 1.0, 1.0, dz)")
     out = [f"\nHENON_RTOL = {HENON_RTOL!r}\nHENON_MAX_SUBSTEPS = {HENON_MAX_SUBSTEPS}\n"]
     out += [_lincomb(n1, k) for k in sorted(arities)]
+    kahan = ["\n@njit(cache=True)\ndef henon_kahan(s, c, x):",
+             "    # s + x with the running compensation c (Kahan summation)"]
+    for i in range(n1):
+        kahan += [f"    x{i} = x[{i}] - c[{i}]", f"    s{i} = s[{i}] + x{i}",
+                  f"    c{i} = (s{i} - s[{i}]) - x{i}"]
+    kahan.append("    return " + _tup([f"s{i}" for i in range(n1)]) + ", "
+                 + _tup([f"c{i}" for i in range(n1)]))
+    out.append("\n".join(kahan) + "\n")
     out += ["\n".join(lines) + "\n", "\n".join(run) + "\n"]
     cur = _tup([f"cur[{i}]" for i in range(n)])
     prev = _tup([f"prev[{i}]" for i in range(n)])

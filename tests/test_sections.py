@@ -114,6 +114,65 @@ def test_every_kind_of_method_is_located(osc, method):
     assert np.max(np.abs(c["t"] - 2 * math.pi * np.arange(1, 3))) <= 1e-3
 
 
+@pytest.mark.parametrize("method,locator,used", [
+    ("rk4:h=0.01", None, "henon"),                                   # fixed step
+    ("rkf45:rtol=1e-10,atol=1e-10", None, "henon"),                  # adaptive, no extension
+    ("odex:rtol=1e-11,atol=1e-11", None, "henon"),                   # extrapolation
+    ("dop853:rtol=1e-12,atol=1e-12", None, "dense"),                 # dense output
+    ("dop853:rtol=1e-12,atol=1e-12", "henon", "henon"),              # Hénon asked for
+    ("rk4:h=0.01+observer:theta=10", None, "henon"),                 # modified field
+])
+def test_crossings_against_the_exact_ones(osc, method, locator, used):
+    """Located inside the compiled driver, each crossing is the exact one (t = 2 pi k, p = 1) up
+    to the global error e_n of the accepted point y_n before it: Hénon's point is on the exact
+    flow through y_n (a rotation here, so it keeps that distance: |t - 2 pi k|, |p - 1| <= e_n;
+    under the observer the flow of the modified field, which coincides with it on H = H0), the
+    dense one within twice the larger error of the step's two ends. The counters are those of the
+    step that holds the crossing; nfev adds the locator's evaluations."""
+    r = solve_section(P, method, 4, t_end=30.0, locator=locator)
+    traj = solve(P, method, t_end=30.0)
+    err = global_errors(traj)
+    c = columns(r)
+    assert r.status == "ok" and r.provenance["locator"] == used and len(r.t) == 4
+    assert np.max(np.abs(c["q"])) <= TOL
+    loc = r.provenance["henon" if used == "henon" else "dense"]["nfev"]
+    for k in range(4):
+        n = int(np.searchsorted(traj.t, r.t[k])) - 1               # t_n < t* <= t_n+1
+        bound = 2 * max(err[n], err[n + 1]) if used == "dense" else 1.01 * err[n]
+        assert abs(r.t[k] - 2 * math.pi * (k + 1)) <= bound + 1e-13
+        assert abs(c["p"][k] - 1.0) <= bound + 1e-13
+        assert (r.steps[k], r.rejected[k]) == (traj.steps[n + 1], traj.rejected[n + 1])
+        assert traj.nfev[n + 1] < r.nfev[k] <= traj.nfev[n + 1] + loc or (used, loc) == ("dense", 0)
+    assert r.nfev[-1] == traj.nfev[n + 1] + loc                   # it stops at the 4th crossing
+    if "observer" in method:
+        assert "modified: observer" in r.provenance["henon"]["field"]
+
+
+def test_resumable_whatever_the_buffer_and_budget(monkeypatch):
+    """The same crossings, bit for bit, with one row per output buffer and one step per call as
+    with large buffers and the tuned budget (the drivers' whole state lives in y_io and st)."""
+    from gnibench.suite.cell import sections
+
+    for method in ["rk4:h=0.01", "rkf45:rtol=1e-9,atol=1e-9", "dop853:rtol=1e-10,atol=1e-10",
+                   "odex:rtol=1e-9,atol=1e-9"]:
+        big = solve_section("henon-heiles", method, 6, t_end=200.0)
+        with monkeypatch.context() as m:
+            m.setattr(sections, "CHUNK", 1)
+            tiny = solve_section("henon-heiles", method, 6, t_end=200.0, budget=1)
+        assert len(big.t) == 6, method
+        for a, b in [(big.t, tiny.t), (big.y, tiny.y), (big.steps, tiny.steps),
+                     (big.nfev, tiny.nfev), (big.rejected, tiny.rejected)]:
+            assert np.array_equal(a, b), method
+
+
+def test_progress_counts_crossings(osc):
+    """Between calls the progress callback gets max(crossings / K, t / t_end)."""
+    seen = []
+    r = solve_section(P, "rk4:h=0.001", 3, t_end=1000.0, progress=seen.append, budget=500)
+    assert len(r.t) == 3 and len(seen) >= 30 and seen == sorted(seen)
+    assert seen[-1] >= 2 / 3 and all(0.0 <= x <= 1.0 for x in seen)   # t / t_end stays < 0.02
+
+
 def test_fewer_crossings_than_asked(osc, capsys):
     code = main(["solve", P, "rk4:h=0.01", "--t-end", "10", "--section", "3"])
     out, err = capsys.readouterr()
