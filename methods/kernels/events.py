@@ -133,12 +133,13 @@ def partial_sample(y0, fy0, sigma, par, ws, k):
 
 
 def grid_sample(y0, fy0, s0, y1, s1, h, tk, tc, par, ws, k):
-    """The sample at grid time tk inside the accepted step (s0, y0) -> (s1, y1) of size h, in the
-    integration variable s: (y, s, nfev, njev, status). tc < 0: the grid's time is s itself; else
-    it is the state component tc (increasing along the step)."""
+    """The sample at grid time tk inside the accepted step (s0, y0) -> (s1, y1) of size h:
+    (y, s, nfev, njev, status). tc < 0: the grid's time is the integration variable itself, and s
+    is tk; else it is the state component tc (increasing along the step) and s is the integration
+    variable at the sample."""
     t1 = s1 if tc < 0 else y1[tc]
     if abs(tk - t1) <= GRID_ULPS * EPS * abs(t1):
-        return y1, s1, 0.0, 0.0, STATUS_OK
+        return y1, s1 if tc >= 0 else tk, 0.0, 0.0, STATUS_OK
     if tc < 0:
         y, nf, nj, s = partial_sample(y0, fy0, tk - s0, par, ws, k)
         return y, tk, nf, nj, s
