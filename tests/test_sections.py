@@ -173,6 +173,18 @@ def test_progress_counts_crossings(osc):
     assert seen[-1] >= 2 / 3 and all(0.0 <= x <= 1.0 for x in seen)   # t / t_end stays < 0.02
 
 
+def test_external_engine_samples_are_scanned(osc):
+    """heyoka (Taylor, tolerance eps) samples every dt_out; its crossings are found by one
+    vectorised scan of the samples and located in one compiled call on the base field: they are
+    the exact ones, with heyoka's step count at the sample that ends each interval."""
+    r = solve_section(P, "heyoka-taylor:dt_out=0.05", 4, t_end=30.0)
+    assert r.status == "ok" and r.provenance["locator"] == "henon"
+    assert "base field" in r.provenance["henon"]["field"]
+    assert np.max(np.abs(r.t - 2 * math.pi * np.arange(1, 5))) <= 1e-13
+    assert np.max(np.abs(r.y[:, 1] - 1.0)) <= 1e-13 and np.max(np.abs(r.y[:, 0])) <= TOL
+    assert np.all(np.diff(r.steps) > 0) and r.steps[0] > 0
+
+
 def test_fewer_crossings_than_asked(osc, capsys):
     code = main(["solve", P, "rk4:h=0.01", "--t-end", "10", "--section", "3"])
     out, err = capsys.readouterr()
