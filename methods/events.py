@@ -38,6 +38,7 @@ from gnibench.suite.foundation.templates import template
 
 HENON_RTOL = 1e-15            # agreement of the results with m and 2m substeps
 HENON_MAX_SUBSTEPS = 4096
+HENON_WALK_MAX = 256          # sub-intervals of the walk in time (16, 64, 256)
 STAGES = dop853.N_STAGES      # DOP853's 12 stages; its 8th-order solution B over them
 
 
@@ -58,41 +59,57 @@ def _lincomb(n1: int, k: int) -> str:
     return f"\n@njit(cache=True)\ndef henon_lc{k}(z, h, {args}):\n    return {_tup(comps)}\n"
 
 
-def henon_source(n: int, field: str = "f") -> str:
-    """``henon_locate(y, t, par) -> (y*, t*, m, nfev)`` for an n-dimensional state and section 0
-    of the problem, integrating the field named ``field``."""
+def _run(name: str, rhs: str, n1: int, arities: set) -> str:
+    """``name(z0, d, m, par)``: m equal DOP853 substeps of dz = rhs(z) over d (unrolled)."""
     A = np.asarray(dop853.A, dtype=float)[:STAGES, :STAGES]
     B = np.asarray(dop853.B, dtype=float)
-    n1 = n + 1
-    ys = _tup([f"z[{i}]" for i in range(n)])
-    lines = ["\n@njit(cache=True)\ndef henon_rhs(z, par):",
-             "    # (dy/dg, dt/dg) = (F, 1) / (grad g . F)  (Hénon 1982)",
-             f"    y = {ys}", f"    F = {field}(y, par)", "    G = section_grad_0(y, par)",
-             "    d = " + " + ".join(f"G[{i}] * F[{i}]" for i in range(n)),
-             "    return " + _tup([f"F[{i}] / d" for i in range(n)] + ["1.0 / d"])]
-    arities = set()
     zero = _tup(["0.0"] * n1)
-    run = ["\n@njit(cache=True)\ndef henon_run(z0, dg, m, par):",
-           "    # m equal DOP853 substeps of the augmented system over dg, accumulated as the",
-           "    # increment dz = z - z0 by compensated (Kahan) summation: its rounding then neither",
-           "    # acts on z nor grows with m, and results with m and 2m can agree to 1e-15",
-           "    hs = dg / m", f"    dz = {zero}", f"    cz = {zero}",
+    run = [f"\n@njit(cache=True)\ndef {name}(z0, d, m, par):",
+           "    # m equal DOP853 substeps over d, accumulated as the increment dz = z - z0 by",
+           "    # compensated (Kahan) summation: its rounding then neither acts on z nor grows with",
+           "    # m, and results with m and 2m can agree to 1e-15",
+           "    hs = d / m", f"    dz = {zero}", f"    cz = {zero}",
            "    for _ in range(m):", "        z = henon_lc1(z0, 1.0, 1.0, dz)",
-           "        k0 = henon_rhs(z, par)"]
-    arities = {1}
+           f"        k0 = {rhs}(z, par)"]
     for i in range(1, STAGES):
         terms = [(A[i, j], j) for j in range(i) if A[i, j] != 0.0]
         arities.add(len(terms))
         args = ", ".join(f"{lit(c)}, k{j}" for c, j in terms)
-        run.append(f"        k{i} = henon_rhs(henon_lc{len(terms)}(z, hs, {args}), par)")
+        run.append(f"        k{i} = {rhs}(henon_lc{len(terms)}(z, hs, {args}), par)")
     terms = [(B[j], j) for j in range(STAGES) if B[j] != 0.0]
     arities.add(len(terms))
     run.append(f"        inc = henon_lc{len(terms)}({zero}, hs, "
                + ", ".join(f"{lit(c)}, k{j}" for c, j in terms) + ")")
     run.append("        dz, cz = henon_kahan(dz, cz, inc)")
     run.append("    return henon_lc1(z0, 1.0, 1.0, dz)")
-    out = [f"\nHENON_RTOL = {HENON_RTOL!r}\nHENON_MAX_SUBSTEPS = {HENON_MAX_SUBSTEPS}\n"]
-    out += [_lincomb(n1, k) for k in sorted(arities)]
+    return "\n".join(run) + "\n"
+
+
+def henon_source(n: int, field: str = "f") -> str:
+    """``henon_locate(y, t, t_next, par) -> (y*, t*, m, nfev, walked)`` for an n-dimensional state
+    and section 0 of the problem, integrating the field named ``field`` (the logic is the template
+    methods/kernels/events.py ``henon_locate``; here the unrolled parts)."""
+    n1 = n + 1
+    ys = _tup([f"z[{i}]" for i in range(n)])
+    dot = " + ".join(f"G[{i}] * F[{i}]" for i in range(n))
+    helpers = [
+        "\n@njit(cache=True)\ndef henon_rhs(z, par):",
+        "    # (dy/dg, dt/dg) = (F, 1) / (grad g . F)  (Hénon 1982)",
+        f"    y = {ys}", f"    F = {field}(y, par)", "    G = section_grad_0(y, par)",
+        f"    d = {dot}",
+        "    return " + _tup([f"F[{i}] / d" for i in range(n)] + ["1.0 / d"]),
+        "\n@njit(cache=True)\ndef flow_rhs(z, par):",
+        "    # (dy/dt, dt/dt) = (F, 1): the same flow in time (to walk towards the section)",
+        f"    F = {field}({ys}, par)",
+        "    return " + _tup([f"F[{i}]" for i in range(n)] + ["1.0"]),
+        "\n@njit(cache=True)\ndef henon_slope(y, par):",
+        "    # grad g . F = dg/dt along the flow",
+        f"    F = {field}(y, par)", "    G = section_grad_0(y, par)", f"    return {dot}",
+        "\n@njit(cache=True)\ndef henon_state(z):", f"    return {ys}",
+        "\n@njit(cache=True)\ndef henon_join(y, t):",
+        "    return " + _tup([f"y[{i}]" for i in range(n)] + ["t"])]
+    arities = {1}
+    runs = _run("henon_run", "henon_rhs", n1, arities) + _run("flow_run", "flow_rhs", n1, arities)
     kahan = ["\n@njit(cache=True)\ndef henon_kahan(s, c, x):",
              "    # s + x with the running compensation c (Kahan summation)"]
     for i in range(n1):
@@ -100,36 +117,11 @@ def henon_source(n: int, field: str = "f") -> str:
                   f"    c{i} = (s{i} - s[{i}]) - x{i}"]
     kahan.append("    return " + _tup([f"s{i}" for i in range(n1)]) + ", "
                  + _tup([f"c{i}" for i in range(n1)]))
-    out.append("\n".join(kahan) + "\n")
-    out += ["\n".join(lines) + "\n", "\n".join(run) + "\n"]
-    cur = _tup([f"cur[{i}]" for i in range(n)])
-    prev = _tup([f"prev[{i}]" for i in range(n)])
-    out.append(f'''
-@njit(cache=True)
-def henon_locate(y, t, par):
-    # Hénon's trick from (t, y): m = 2, 4, ... substeps until two results agree to HENON_RTOL
-    dg = -section_g_0(y, par)
-    if dg == 0.0:
-        return y, t, 0, 0.0
-    z0 = {_tup([f"y[{i}]" for i in range(n)] + ["t"])}
-    m = 2
-    prev = henon_run(z0, dg, m, par)
-    nfev = {float(STAGES)!r} * m
-    while m < HENON_MAX_SUBSTEPS:
-        m *= 2
-        cur = henon_run(z0, dg, m, par)
-        nfev += {float(STAGES)!r} * m
-        agree = True
-        for i in range({n1}):
-            if not abs(cur[i] - prev[i]) <= HENON_RTOL * max(1.0, abs(cur[i])):
-                agree = False
-                break
-        if agree:
-            return {cur}, cur[{n}], m, nfev
-        prev = cur
-    return {prev}, prev[{n}], m, nfev
-''')
-    return "".join(out)
+    return (f"\nHENON_RTOL = {HENON_RTOL!r}\nHENON_MAX_SUBSTEPS = {HENON_MAX_SUBSTEPS}\n"
+            f"HENON_STAGES = {float(STAGES)!r}\nHENON_WALK_MAX = {HENON_WALK_MAX}\n"
+            + "".join(_lincomb(n1, k) for k in sorted(arities)) + "\n".join(kahan) + "\n"
+            + "\n".join(helpers) + "\n" + runs
+            + template(events.henon_converge) + template(events.henon_locate))
 
 
 def root_functions(n: int, section: bool) -> str:
@@ -165,7 +157,7 @@ def section_values(Y, par, out):
 def henon_all(T, Y, idx, par, out_t, out_y, out_ok, out_m):
     # from sample idx[j] (the one before crossing j): located point, direction, substeps
     for j in range(idx.shape[0]):
-        ys, ts, m, _ = henon_locate(to_tuple(Y[idx[j]]), T[idx[j]], par)
+        ys, ts, m, _, _ = henon_locate(to_tuple(Y[idx[j]]), T[idx[j]], T[idx[j] + 1], par)
         out_t[j] = ts
         store(ys, out_y, j)
         out_ok[j] = section_cond_0(ys, par) > 0.0

@@ -91,6 +91,27 @@ def test_crossing_is_on_the_numerical_orbit(osc):
         assert np.max(np.abs(flow - ys)) <= TOL
 
 
+@pytest.mark.parametrize("method", ["rkf45:rtol=1e-6,atol=1e-6", "odex:rtol=1e-5,atol=1e-5",
+                                    "gauss4:h=0.2"])
+def test_henon_point_is_on_the_exact_flow_from_the_accepted_point(osc, method):
+    """Adaptive, extrapolation and implicit cells far from the exact orbit (1e-6 .. 1e-4): the
+    point located inside the compiled driver is on the exact flow through the accepted point
+    before the crossing, to round-off, at the located time. odex's steps (~1.8) hold the maximum
+    of q before a downward crossing: Hénon's trick from the step's start would run backward to
+    the previous (upward) crossing and count it twice; the flow is first carried in time past the
+    turning point (``time_walks``)."""
+    r = solve_section(P, method, 3, t_end=25.0)
+    traj = solve(P, method, t_end=25.0)
+    assert r.provenance["henon"]["not_located"] == 0
+    assert (r.provenance["henon"]["time_walks"] > 0) == method.startswith("odex")
+    assert np.max(np.abs(r.t - 2 * math.pi * np.arange(1, 4))) > 1e-9     # numerical, not exact
+    for k in range(3):
+        n = int(np.searchsorted(traj.t, r.t[k])) - 1
+        assert traj.y[n, 0] < 0 <= traj.y[n + 1, 0] and r.steps[k] == traj.steps[n + 1]
+        flow = osc.exact(np.array([r.t[k] - traj.t[n]]), traj.y[n], {})[0]
+        assert np.max(np.abs(flow - r.y[k])) <= TOL
+
+
 def test_same_method_step_reproduces_the_point(osc):
     """One rk4 step of the gap t* - t_n from the sample y_n lands on the located point."""
     h = 1e-3

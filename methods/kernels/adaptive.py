@@ -230,7 +230,7 @@ def integrate_adaptive(y_io, st, par, t_end, h0, hmax, rtol, atol, every, dt_out
                         ys, ts, it = dense_crossing(cf, y_old, t_old, g0, y, t, g1, h, par)
                         st[ST_NEWTON] = max(st[ST_NEWTON], it)
                     else:
-                        ys, ts, nf = henon_crossing(y_old, t_old, par, st)
+                        ys, ts, nf = henon_crossing(y_old, t_old, t, par, st)
                         nfev += nf
                     row += section_event(ys, ts, par, st, out_t, out_y, out_c, row, nacc, nfev,
                                          0.0, nrej)

@@ -128,7 +128,8 @@ def integrate(y_io, st, par, h, nsteps, h_last, every, dt_out, n_out, budget, ou
         if SECTION:
             g1 = section_g_0(y, par)
             if crosses(g0, g1):
-                ys, ts, nf = henon_crossing(y_old, (done - 1) * h, par, st)
+                ys, ts, nf = henon_crossing(y_old, (done - 1) * h,
+                                            done * h if done < nsteps else t_final, par, st)
                 nfev += nf
                 row += section_event(ys, ts, par, st, out_t, out_y, out_c, row, done, nfev, njev,
                                      0.0)

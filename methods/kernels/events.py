@@ -23,17 +23,28 @@ import math
 
 from gnibench.methods.kernels.free import (
     GRID_ULPS,
+    HENON_MAX_SUBSTEPS,
+    HENON_RTOL,
+    HENON_STAGES,
+    HENON_WALK_MAX,
     PARTIAL,
     ROOT_SLOPE,
     ROOT_VALUE,
     ST_FOUND,
+    ST_HENON_FAILED,
     ST_LOC_NFEV,
     ST_MAX_G,
     ST_SUBSTEPS,
+    ST_WALKS,
     STATUS_OK,
+    N,
     dense_eval,
     dense_slope,
-    henon_locate,
+    flow_run,
+    henon_join,
+    henon_run,
+    henon_slope,
+    henon_state,
     post_step,
     project,
     record_row,
@@ -63,12 +74,84 @@ def section_event(ys, ts, par, st, out_t, out_y, out_c, row, steps, nfev, njev, 
     return 1
 
 
-def henon_crossing(y, t, par, st):
-    """Hénon's trick from the accepted point (t, y) before the crossing; keeps the statistics."""
-    ys, ts, m, nf = henon_locate(y, t, par)
+def henon_crossing(y, t, t_next, par, st):
+    """Hénon's trick from the accepted point (t, y) before the crossing (the step ends at
+    t_next); keeps the statistics."""
+    ys, ts, m, nf, walked = henon_locate(y, t, t_next, par)
     st[ST_SUBSTEPS] = max(st[ST_SUBSTEPS], m)
     st[ST_LOC_NFEV] += nf
+    if walked == 1:
+        st[ST_WALKS] += 1.0
+    elif walked == 2:
+        st[ST_HENON_FAILED] += 1.0
     return ys, ts, nf
+
+
+def henon_converge(z0, d, par, in_time):
+    """(y, t) carried over d in g (Hénon's system) or in time (``in_time``) by DOP853 with
+    m = 2, 4, ... equal substeps until two successive results agree to HENON_RTOL
+    (|z_2m - z_m| <= HENON_RTOL max(1, |z_2m|)), at most HENON_MAX_SUBSTEPS: (z, m, nfev)."""
+    m = 2
+    prev = flow_run(z0, d, m, par) if in_time else henon_run(z0, d, m, par)
+    nfev = HENON_STAGES * m
+    while m < HENON_MAX_SUBSTEPS:
+        m *= 2
+        cur = flow_run(z0, d, m, par) if in_time else henon_run(z0, d, m, par)
+        nfev += HENON_STAGES * m
+        agree = True
+        for i in range(N + 1):
+            if not abs(cur[i] - prev[i]) <= HENON_RTOL * max(1.0, abs(cur[i])):
+                agree = False
+                break
+        if agree:
+            return cur, m, nfev
+        prev = cur
+    return prev, m, nfev
+
+
+def henon_locate(y, t, t_next, par):
+    """The crossing on the exact flow through (t, y), the accepted point before a sign change of
+    g in (t, t_next]: (y*, t*, m, nfev, walked).
+
+    Hénon's trick integrates in g from g(y) to 0, which is valid while g moves monotonically
+    toward the section, i.e. when dt/dg = 1 / (grad g . F) has the sign of Δg = -g(y) along the
+    way. When the step holds a turning point of g before the crossing (large steps, nearly
+    tangent crossings), it is not valid from y (it runs backward in time, to an earlier crossing):
+    then (choice) the same flow is first carried in time, in J equal parts of the step (J = 16,
+    64, 256; each part by DOP853 with the same doubling rule), to the last point before g changes
+    sign, and Hénon's trick is applied from there (walked = 1). The point stays on the exact flow
+    through y. Should that fail too, the direct result is returned (walked = 2)."""
+    z0 = henon_join(y, t)
+    dg = -section_g_0(y, par)
+    if dg == 0.0:
+        return y, t, 0, 0.0, 0
+    h = t_next - t
+    nfev = 0.0
+    if henon_slope(y, par) * dg > 0.0:
+        z, m, nf = henon_converge(z0, dg, par, False)
+        nfev += nf
+        if m < HENON_MAX_SUBSTEPS and t < z[N] <= t + 2.0 * h:
+            return henon_state(z), z[N], m, nfev, 0
+    parts = 16
+    while parts <= HENON_WALK_MAX:
+        zw = z0
+        for _ in range(2 * parts):                     # at most two step lengths ahead
+            zn, mw, nf = henon_converge(zw, h / parts, par, True)
+            nfev += nf
+            gn = section_g_0(henon_state(zn), par)
+            if (dg < 0.0 and gn <= 0.0) or (dg > 0.0 and gn >= 0.0):
+                yw = henon_state(zw)
+                dgw = -section_g_0(yw, par)
+                if henon_slope(yw, par) * dgw > 0.0:
+                    zz, mz, nf = henon_converge(zw, dgw, par, False)
+                    nfev += nf
+                    if mz < HENON_MAX_SUBSTEPS and zw[N] < zz[N] <= 2.0 * zn[N] - zw[N]:
+                        return henon_state(zz), zz[N], max(mz, mw), nfev, 1
+                break
+            zw = zn
+        parts *= 4
+    z, m, nf = henon_converge(z0, dg, par, False)
+    return henon_state(z), z[N], m, nfev + nf, 2
 
 
 def dense_root(cf, par, tc, tk, g_lo, g_hi, best_g, best_u):

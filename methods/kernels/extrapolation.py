@@ -327,7 +327,7 @@ def integrate_adaptive(y_io, st, par, t_end, h0, hmax, rtol, atol, every, dt_out
         if SECTION:
             g1 = section_g_0(y, par)
             if crosses(g0, g1):
-                ys, ts, nf = henon_crossing(y_old, t_old, par, st)
+                ys, ts, nf = henon_crossing(y_old, t_old, t, par, st)
                 nfev += nf
                 row += section_event(ys, ts, par, st, out_t, out_y, out_c, row, nacc, nfev, 0.0,
                                      nrej)

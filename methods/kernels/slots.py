@@ -22,8 +22,10 @@ SLOTS = {
     "ST_MAX_G": 15,       # largest |g| at a written crossing
     "ST_LOC_NFEV": 16,    # f-evaluations spent by the locators (included in nfev)
     "ST_ROLLBACKS": 17,   # steps redone because a step's grid points did not fit the buffer
+    "ST_WALKS": 18,       # crossings Hénon's trick reached after a walk in time (turning point)
+    "ST_HENON_FAILED": 19,  # crossings where neither way was valid (the direct result is kept)
 }
-STATE = 18
+STATE = 20
 
 ST_KOUT = SLOTS["ST_KOUT"]
 ST_TCOMP = SLOTS["ST_TCOMP"]
@@ -34,6 +36,8 @@ ST_SUBSTEPS = SLOTS["ST_SUBSTEPS"]
 ST_MAX_G = SLOTS["ST_MAX_G"]
 ST_LOC_NFEV = SLOTS["ST_LOC_NFEV"]
 ST_ROLLBACKS = SLOTS["ST_ROLLBACKS"]
+ST_WALKS = SLOTS["ST_WALKS"]
+ST_HENON_FAILED = SLOTS["ST_HENON_FAILED"]
 
 #: a grid time within GRID_ULPS ulps of a step end is that step end (no partial step)
 GRID_ULPS = 4.0

@@ -42,6 +42,14 @@ Design
      ``f``, i.e. the base field or the modified one (observer, penalty); for external engines and
      transformed problems it is the base field of the problem. The located point is on the exact
      flow through y_n. Its f-evaluations are counted in nfev (and in ``meta.henon.nfev``).
+     (choice) Integrating in g is valid only while g moves monotonically toward 0; when the step
+     holds a turning point of g before the crossing (large steps, nearly tangent crossings) the
+     trick from y_n would run backward in time to an earlier crossing (the previous code then
+     lost the crossing: 3 of 3649 on the so(4) run of benchmarks/test_bench_sections.py). Then
+     the same flow is first carried in time from y_n, in 16 (64, 256) equal parts of the step,
+     to the last point before g changes sign, and the trick is applied from there
+     (``meta.henon.time_walks``; ``not_located`` counts the crossings where even that failed and
+     the direct result was kept).
 
    When g is a state coordinate (every current section), g at the located point is 0 up to
    round-off with either locator; the largest located |g| is reported (``meta.max_abs_g``).
@@ -58,10 +66,12 @@ import numpy as np
 from gnibench.methods.events import HENON_MAX_SUBSTEPS, HENON_RTOL
 from gnibench.methods.kernels.slots import (
     ST_FOUND,
+    ST_HENON_FAILED,
     ST_LOC_NFEV,
     ST_MAX_G,
     ST_NEWTON,
     ST_SUBSTEPS,
+    ST_WALKS,
     ST_WANTED,
 )
 from gnibench.suite.cell.calls import Buffers, run_driver
@@ -171,6 +181,7 @@ def integrate_section(problem, method, crossings: int, steps: int | None = None,
                  if method.modifiers else "base")
         meta["henon"] = _henon_meta(int(st[ST_SUBSTEPS]), f"field integrated by the method ({field})",
                                     float(st[ST_LOC_NFEV]))
+        meta["henon"].update(time_walks=int(st[ST_WALKS]), not_located=int(st[ST_HENON_FAILED]))
     else:
         ext = method.base.record.data.dense
         meta["dense"] = {"extension": ext.reference, "order": ext.order,
