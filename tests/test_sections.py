@@ -1,4 +1,4 @@
-"""Poincaré sections (suite/sections.py): crossings located to <= 1e-13 by dense output (dopri5,
+"""Poincaré sections (suite/cell/sections.py): crossings located to <= 1e-13 by dense output (dopri5,
 dop853 adaptive) or by Hénon's trick (every other cell).
 
 The harmonic oscillator q' = p, p' = -q from (q, p) = (0, 1) is (sin t, cos t): it crosses

@@ -11,6 +11,7 @@ import math
 import numpy as np
 import pandas as pd
 import pytest
+from gnibench.methods import COMPILED
 from gnibench.suite.cell import driver
 from gnibench.suite.cell.solve import solve
 from gnibench.suite.cli.main import main
@@ -61,6 +62,28 @@ def test_partial_step_is_one_step_of_the_method(method, fixed):
         assert np.array_equal(one.y[-1], grid.y[k])
     per_step = 4.0 if method.startswith("rk4") else 5.0
     assert grid.nfev[-1] - plain.nfev[-1] == 2 * per_step
+
+
+def _fixed_spec(mid: str, h: float) -> str:
+    names = {p.name for p in COMPILED[mid].params}
+    return f"{mid}:" + ("adaptive=false," if "adaptive" in names else "") + f"h={h!r}"
+
+
+@pytest.mark.parametrize("mid", sorted(COMPILED))
+def test_every_compiled_method_samples_by_its_own_step(mid):
+    """Registry-wide: h = 0.03, dt_out = 0.1: the samples at t = 0.1, 0.2 are one step of the
+    method itself (fixed-step mode) of size t_k - t_n from the accepted point y_n, bit for bit;
+    t = 0.3 is the end of step 10 (no partial step)."""
+    problem = "euler-so4" if mid == "lie-poisson" else "kepler-2d"
+    plain = solve(problem, _fixed_spec(mid, 0.03), steps=12)
+    grid = solve(problem, _fixed_spec(mid, 0.03), steps=12, dt_out=0.1)
+    assert grid.status == "ok" and grid.steps.tolist() == [0, 4, 7, 10, 12]
+    assert np.array_equal(grid.y[3], plain.y[10]) and np.array_equal(grid.y[-1], plain.y[-1])
+    for k in (1, 2):
+        n = int(grid.steps[k]) - 1
+        y = ",".join(f"{s}0={float(v)!r}" for s, v in zip(plain.state_names, plain.y[n]))
+        one = solve(f"{problem}:{y}", _fixed_spec(mid, float(grid.t[k] - plain.t[n])), steps=1)
+        assert np.array_equal(one.y[-1], grid.y[k]), k
 
 
 def test_grid_points_on_step_ends_are_the_step_ends():

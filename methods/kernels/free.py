@@ -16,7 +16,7 @@ f = fjac = to_tuple = shifted = store = _unbound
 lu_solve = newton_done = _unbound
 invariants = make_ws = step = post_step = project = record_row = step_err = to_tuple_shift = _unbound
 step_stages = dense_from_stages = dense_eval = dense_slope = _unbound
-# section functions of the problem (problems/codegen.py), Hénon's locator (methods/henon.py), the
+# section functions of the problem (problems/codegen.py), Hénon's locator (methods/events.py), the
 # event helpers (methods/kernels/events.py) and the per-family names they are renamed to
 section_g_0 = section_cond_0 = section_grad_0 = henon_locate = _unbound
 crosses = section_event = henon_crossing = dense_crossing = dense_root_time = _unbound
