@@ -15,8 +15,9 @@ from fractions import Fraction as Fr
 import gnibench.methods.dop853_coefficients as dop853_data
 from gnibench.methods.base import Method, adaptive_params
 from gnibench.methods.dense_output import DenseOutput, generate_dense
+from gnibench.methods.events import grid_functions, root_functions, variant
 from gnibench.methods.explicit_rk import combination, generate_erk, helpers, stage_lines
-from gnibench.methods.kernels import adaptive
+from gnibench.methods.kernels import adaptive, events
 from gnibench.methods.tableau import Tableau, lit, tableau
 from gnibench.suite.foundation.params import Param
 from gnibench.suite.foundation.templates import template
@@ -160,14 +161,24 @@ def generate_adaptive(pair: Pair):
                 + [f"    return y1, err, {knew}"]
                 + ["\n@njit(cache=True)\ndef step_stages(y, h, par, k0, rtol, atol):"] + lines
                 + [f"    return y1, err, {knew}, ({stages})"])
-        dense_src, dense_nfev = "", 0.0
+        sections = bool(ctx.problem is not None and ctx.problem.sections)
+        drive = adaptive.integrate_adaptive
+        src = (variant(drive, "integrate_adaptive") + template(adaptive.partial_adaptive)
+               + grid_functions("adaptive", "partial_adaptive")
+               + variant(drive, "adaptive_grid", "GRID", "GRIDDED"))
+        if sections:
+            src += variant(drive, "adaptive_section", "SECTION")
+        dense_nfev = 0.0
         if pair.dense is not None:            # integrate_dense, dense_coeffs and what they call
             dense_src, dense_arities = generate_dense(pair.dense, tab, count, n)
             arities |= dense_arities
             dense_nfev = float(pair.dense.extra_stages)
-            dense_src += (template(adaptive.dense_coeffs)
-                          + template(adaptive.integrate_adaptive,
-                                     {"integrate_adaptive": "integrate_dense", "DENSE_OUTPUT": "True"}))
+            src += (dense_src + template(adaptive.dense_coeffs) + root_functions(n, sections)
+                    + variant(drive, "integrate_dense", "DENSE_OUTPUT", "GRIDDED", "WITH_STAGES"))
+            if sections:
+                src += (template(events.dense_crossing)
+                        + variant(drive, "adaptive_section_dense", "SECTION", "SECTION_DENSE",
+                                  "WITH_STAGES"))
         comma = "," if n == 1 else ""
         shift = ", ".join(f"y[{i}] + h * v[{i}]" for i in range(n))
         consts = (f"\nFSAL = {fsal}\nSTAGES_NEW = {float(count - 1 + fsal)!r}\nIORD = {pair.iord}\n"
@@ -175,8 +186,7 @@ def generate_adaptive(pair: Pair):
                   f"FAC1 = {pair.fac1!r}\nFAC2 = {pair.fac2!r}\nDENSE_NFEV = {dense_nfev!r}\n"
                   f"\n@njit(cache=True)\ndef to_tuple_shift(y, h, v):\n    return ({shift}{comma})\n")
         return (consts + helpers(n, arities) + "\n".join(body) + "\n"
-                + template(adaptive.initial_step) + template(adaptive.first_step)
-                + template(adaptive.integrate_adaptive, {"DENSE_OUTPUT": "False"}) + dense_src)
+                + template(adaptive.initial_step) + template(adaptive.first_step) + src)
     return generate
 
 

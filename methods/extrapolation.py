@@ -13,6 +13,7 @@ import itertools
 from dataclasses import dataclass
 
 from gnibench.methods.base import Method, adaptive_params
+from gnibench.methods.events import grid_functions, variant
 from gnibench.methods.kernels import adaptive, extrapolation
 from gnibench.suite.foundation.params import Param
 from gnibench.suite.foundation.templates import template
@@ -82,7 +83,12 @@ def _generate(data: Extrapolation):
             src += (template(adaptive.initial_step, {"IORD": "HINIT_ORDER"})
                     + template(adaptive.first_step)
                     + template(extrapolation.column)
-                    + template(extrapolation.integrate_adaptive))
+                    + variant(extrapolation.integrate_adaptive, "integrate_adaptive")
+                    + template(extrapolation.partial_adaptive)
+                    + grid_functions("adaptive", "partial_adaptive")
+                    + variant(extrapolation.integrate_adaptive, "adaptive_grid", "GRID"))
+            if ctx.problem is not None and ctx.problem.sections:
+                src += variant(extrapolation.integrate_adaptive, "adaptive_section", "SECTION")
         return src
     return generate
 

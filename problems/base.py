@@ -72,6 +72,8 @@ class Transform:
     ``to_transformed(y0, values) -> (values of ``problem``)`` gives the transformed problem's
     option values (parameters and initial point); ``back(Z, values) -> (t, Y)`` maps its samples
     to the original time and state, so every metric of the original problem applies unchanged.
+    ``time`` names the transformed system's state component that is the original time (K-S: t,
+    with the fictitious time s as independent variable): a time grid (``dt_out``) is laid in it.
     """
 
     option: str
@@ -79,6 +81,7 @@ class Transform:
     to_transformed: Callable
     back: Callable
     doc: str = ""
+    time: str | None = None
 
 
 @dataclass(frozen=True)

@@ -73,7 +73,8 @@ def _from_ks(Z, values):
 
 
 KS = Transform(option="ks", problem=kepler_ks.PROBLEM, to_transformed=_to_ks, back=_from_ks,
-               doc="K-S regularization [B] (5.4): integrate in fictitious time s (h, --t-end in s)")
+               doc="K-S regularization [B] (5.4): integrate in fictitious time s (h, --t-end in s)",
+               time="t")
 
 
 class Kepler3D(Problem):

@@ -16,9 +16,9 @@ import numpy as np
 import pandas as pd
 import pytest
 from gnibench.methods.embedded_rk import DOP853, DOPRI5
+from gnibench.suite.cell.calls import COUNTERS
 from gnibench.suite.cell.codegen import load
-from gnibench.suite.cell.compiled import compile_cell, dense_output_refusal
-from gnibench.suite.cell.sections import _adaptive_chunks
+from gnibench.suite.cell.compiled import STATE, compile_cell, dense_output_refusal
 from gnibench.suite.cell.solve import solve
 from gnibench.suite.cell.spec import parse_method, parse_problem, prepare
 from gnibench.suite.cli.main import main
@@ -114,9 +114,13 @@ def test_recomputed_step_is_the_drivers(method):
     """dense_coeffs(y_n, h_n) ends on the driver's y_n+1 bit for bit, at every accepted step."""
     prob, cfg = prepare("kepler-2d", f"{method}:rtol=1e-10,atol=1e-10")
     cell = compile_cell(prob, cfg)
-    (t, Y, H, code, _, _), = list(_adaptive_chunks(cell, prob.record, cfg.base.values, 6 * math.pi,
-                                                   1 << 40))
-    assert code == "ok" and len(t) > 100 and H[0] == 0.0 and np.all(H[1:] > 0)
+    v, rows, t_end = cfg.base.values, 4096, 6 * math.pi
+    t, Y, C = np.empty(rows), np.empty((rows, 4)), np.zeros((rows, COUNTERS))
+    y_io, st = np.array([cell.y0, np.zeros(4)]), np.zeros(STATE)
+    code, n = cell.kernel.integrate_adaptive(y_io, st, cell.par, t_end, v["h0"], t_end, v["rtol"],
+                                             v["atol"], 1, 0.0, 0, v["max_steps"], 1 << 40, t, Y, C)
+    t, Y, H = t[:n], Y[:n], C[:n, 4]             # the 5th column: size of the step ending there
+    assert code == 0 and len(t) > 100 and H[0] == 0.0 and np.all(H[1:] > 0)
     for n in range(len(t) - 1):
         y = tuple(Y[n])
         y1, _ = cell.kernel.dense_coeffs(y, float(H[n + 1]), cell.par, cell.kernel.f(y, cell.par))
@@ -168,14 +172,20 @@ def test_dt_out_samples_as_accurate_as_the_steps(method, tol, bound):
     assert np.max(global_errors(dense) - enclosing) <= bound
 
 
-@pytest.mark.parametrize("problem,method,why", [
-    ("kepler-2d", "dopri5:dt_out=0.1+projection:on=H/L", r"dt_out needs dense output.*\+projection"),
-    ("geodesic-genus2", "dop853:dt_out=0.1", "dt_out needs dense output.*post_step"),
-    ("kepler-3d:ks=true", "dop853:dt_out=0.1", "transformed system of kepler-3d is not t"),
+@pytest.mark.parametrize("problem,method,locator,why", [
+    ("kepler-2d", "dopri5:dt_out=0.1+projection:on=H/L", "partial step", "+projection"),
+    ("geodesic-genus2", "dop853:dt_out=0.1", "partial step", "post_step"),
+    ("kepler-3d:ks=true", "dop853:dt_out=0.1", "dense output", ""),
 ])
-def test_dt_out_refused(problem, method, why):
-    with pytest.raises(UserError, match=why):
-        solve(problem, method, t_end=1.0)
+def test_dt_out_where_dense_output_does_not_apply(problem, method, locator, why):
+    """The method option dt_out follows the rules of --dt-out (suite/cell/timegrid.py): where the
+    accepted points are not the extension's endpoints the grid is filled by partial steps (it was
+    refused before), and for K-S the grid is in the physical time t."""
+    r = solve(problem, method, t_end=1.0)
+    grid = r.provenance["time_grid"]
+    assert r.status == "ok" and grid["locator"] == locator and why in grid["why_not_dense"]
+    k = np.arange(len(r.t) - 1)
+    assert len(k) >= 3 and np.max(np.abs(r.t[:-1] - 0.1 * k)) <= 1e-14 * max(1.0, r.t[-1])
 
 
 def test_dense_output_refusal_reasons():

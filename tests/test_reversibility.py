@@ -87,8 +87,8 @@ def forth_and_back(pid: str, mid: str, steps: int = STEPS) -> tuple[float, float
     def run(y, hh):
         out_t, out_y, out_c = np.empty(4), np.empty((4, n)), np.zeros((4, 5))
         y_io, st = np.array([y, np.zeros(n)], dtype=np.float64), np.zeros(FIXED_STATE)
-        code, rows = cell.kernel.integrate(y_io, st, cell.par, hh, steps, hh, steps, 1 << 40,
-                                           out_t, out_y, out_c)
+        code, rows = cell.kernel.integrate(y_io, st, cell.par, hh, steps, hh, steps, 0.0, 0,
+                                           1 << 40, out_t, out_y, out_c)
         assert code == 0 and st[0] == steps, (pid, mid, hh, code, st[0])
         return out_y[rows - 1].copy()
 

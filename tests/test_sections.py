@@ -1,4 +1,4 @@
-"""Poincaré sections (suite/sections.py): crossings located to <= 1e-13 by dense output (dopri5,
+"""Poincaré sections (suite/cell/sections.py): crossings located to <= 1e-13 by dense output (dopri5,
 dop853 adaptive) or by Hénon's trick (every other cell).
 
 The harmonic oscillator q' = p, p' = -q from (q, p) = (0, 1) is (sin t, cos t): it crosses
@@ -91,6 +91,27 @@ def test_crossing_is_on_the_numerical_orbit(osc):
         assert np.max(np.abs(flow - ys)) <= TOL
 
 
+@pytest.mark.parametrize("method", ["rkf45:rtol=1e-6,atol=1e-6", "odex:rtol=1e-5,atol=1e-5",
+                                    "gauss4:h=0.2"])
+def test_henon_point_is_on_the_exact_flow_from_the_accepted_point(osc, method):
+    """Adaptive, extrapolation and implicit cells far from the exact orbit (1e-6 .. 1e-4): the
+    point located inside the compiled driver is on the exact flow through the accepted point
+    before the crossing, to round-off, at the located time. odex's steps (~1.8) hold the maximum
+    of q before a downward crossing: Hénon's trick from the step's start would run backward to
+    the previous (upward) crossing and count it twice; the flow is first carried in time past the
+    turning point (``time_walks``)."""
+    r = solve_section(P, method, 3, t_end=25.0)
+    traj = solve(P, method, t_end=25.0)
+    assert r.provenance["henon"]["not_located"] == 0
+    assert (r.provenance["henon"]["time_walks"] > 0) == method.startswith("odex")
+    assert np.max(np.abs(r.t - 2 * math.pi * np.arange(1, 4))) > 1e-9     # numerical, not exact
+    for k in range(3):
+        n = int(np.searchsorted(traj.t, r.t[k])) - 1
+        assert traj.y[n, 0] < 0 <= traj.y[n + 1, 0] and r.steps[k] == traj.steps[n + 1]
+        flow = osc.exact(np.array([r.t[k] - traj.t[n]]), traj.y[n], {})[0]
+        assert np.max(np.abs(flow - r.y[k])) <= TOL
+
+
 def test_same_method_step_reproduces_the_point(osc):
     """One rk4 step of the gap t* - t_n from the sample y_n lands on the located point."""
     h = 1e-3
@@ -112,6 +133,77 @@ def test_every_kind_of_method_is_located(osc, method):
     assert r.status == "ok" and len(c["t"]) == 2
     assert np.max(np.abs(c["q"])) <= TOL and np.all(c["p"] > 0)
     assert np.max(np.abs(c["t"] - 2 * math.pi * np.arange(1, 3))) <= 1e-3
+
+
+@pytest.mark.parametrize("method,locator,used", [
+    ("rk4:h=0.01", None, "henon"),                                   # fixed step
+    ("rkf45:rtol=1e-10,atol=1e-10", None, "henon"),                  # adaptive, no extension
+    ("odex:rtol=1e-11,atol=1e-11", None, "henon"),                   # extrapolation
+    ("dop853:rtol=1e-12,atol=1e-12", None, "dense"),                 # dense output
+    ("dop853:rtol=1e-12,atol=1e-12", "henon", "henon"),              # Hénon asked for
+    ("rk4:h=0.01+observer:theta=10", None, "henon"),                 # modified field
+])
+def test_crossings_against_the_exact_ones(osc, method, locator, used):
+    """Located inside the compiled driver, each crossing is the exact one (t = 2 pi k, p = 1) up
+    to the global error e_n of the accepted point y_n before it: Hénon's point is on the exact
+    flow through y_n (a rotation here, so it keeps that distance: |t - 2 pi k|, |p - 1| <= e_n;
+    under the observer the flow of the modified field, which coincides with it on H = H0), the
+    dense one within twice the larger error of the step's two ends. The counters are those of the
+    step that holds the crossing; nfev adds the locator's evaluations."""
+    r = solve_section(P, method, 4, t_end=30.0, locator=locator)
+    traj = solve(P, method, t_end=30.0)
+    err = global_errors(traj)
+    c = columns(r)
+    assert r.status == "ok" and r.provenance["locator"] == used and len(r.t) == 4
+    assert np.max(np.abs(c["q"])) <= TOL
+    loc = r.provenance["henon" if used == "henon" else "dense"]["nfev"]
+    for k in range(4):
+        n = int(np.searchsorted(traj.t, r.t[k])) - 1               # t_n < t* <= t_n+1
+        bound = 2 * max(err[n], err[n + 1]) if used == "dense" else 1.01 * err[n]
+        assert abs(r.t[k] - 2 * math.pi * (k + 1)) <= bound + 1e-13
+        assert abs(c["p"][k] - 1.0) <= bound + 1e-13
+        assert (r.steps[k], r.rejected[k]) == (traj.steps[n + 1], traj.rejected[n + 1])
+        assert traj.nfev[n + 1] < r.nfev[k] <= traj.nfev[n + 1] + loc or (used, loc) == ("dense", 0)
+    assert r.nfev[-1] == traj.nfev[n + 1] + loc                   # it stops at the 4th crossing
+    if "observer" in method:
+        assert "modified: observer" in r.provenance["henon"]["field"]
+
+
+def test_resumable_whatever_the_buffer_and_budget(monkeypatch):
+    """The same crossings, bit for bit, with one row per output buffer and one step per call as
+    with large buffers and the tuned budget (the drivers' whole state lives in y_io and st)."""
+    from gnibench.suite.cell import sections
+
+    for method in ["rk4:h=0.01", "rkf45:rtol=1e-9,atol=1e-9", "dop853:rtol=1e-10,atol=1e-10",
+                   "odex:rtol=1e-9,atol=1e-9"]:
+        big = solve_section("henon-heiles", method, 6, t_end=200.0)
+        with monkeypatch.context() as m:
+            m.setattr(sections, "CHUNK", 1)
+            tiny = solve_section("henon-heiles", method, 6, t_end=200.0, budget=1)
+        assert len(big.t) == 6, method
+        for a, b in [(big.t, tiny.t), (big.y, tiny.y), (big.steps, tiny.steps),
+                     (big.nfev, tiny.nfev), (big.rejected, tiny.rejected)]:
+            assert np.array_equal(a, b), method
+
+
+def test_progress_counts_crossings(osc):
+    """Between calls the progress callback gets max(crossings / K, t / t_end)."""
+    seen = []
+    r = solve_section(P, "rk4:h=0.001", 3, t_end=1000.0, progress=seen.append, budget=500)
+    assert len(r.t) == 3 and len(seen) >= 30 and seen == sorted(seen)
+    assert seen[-1] >= 2 / 3 and all(0.0 <= x <= 1.0 for x in seen)   # t / t_end stays < 0.02
+
+
+def test_external_engine_samples_are_scanned(osc):
+    """heyoka (Taylor, tolerance eps) samples every dt_out; its crossings are found by one
+    vectorised scan of the samples and located in one compiled call on the base field: they are
+    the exact ones, with heyoka's step count at the sample that ends each interval."""
+    r = solve_section(P, "heyoka-taylor:dt_out=0.05", 4, t_end=30.0)
+    assert r.status == "ok" and r.provenance["locator"] == "henon"
+    assert "base field" in r.provenance["henon"]["field"]
+    assert np.max(np.abs(r.t - 2 * math.pi * np.arange(1, 5))) <= 1e-13
+    assert np.max(np.abs(r.y[:, 1] - 1.0)) <= 1e-13 and np.max(np.abs(r.y[:, 0])) <= TOL
+    assert np.all(np.diff(r.steps) > 0) and r.steps[0] > 0
 
 
 def test_fewer_crossings_than_asked(osc, capsys):
@@ -177,7 +269,10 @@ def test_dense_locator_finds_the_exact_crossings(osc, method):
     r = solve_section(P, method, 3, t_end=20.0)
     c = columns(r)
     assert r.status == "ok" and r.provenance["locator"] == "dense" and "henon" not in r.provenance
-    assert r.provenance["dense"]["fallbacks"] == 0 and 1 <= r.provenance["dense"]["max_iterations"] <= 10
+    assert 1 <= r.provenance["dense"]["max_iterations"] <= 10
+    # the extension is formed from the accepted step's stages (no recomputation): DOP853's 3 extra
+    # stages at each of the 6 sign changes up to the 3rd upward crossing (t = pi, 2 pi, ..., 6 pi)
+    assert r.provenance["dense"]["nfev"] == (18 if "dop853" in method else 0)
     assert np.max(np.abs(c["q"])) <= TOL and r.provenance["max_abs_g"] <= TOL
     traj = solve(P, method, t_end=20.0)
     for k in range(3):

@@ -19,16 +19,29 @@ import math
 
 import numpy as np
 from gnibench.methods.kernels.free import (
+    GRID,
+    GRID_ULPS,
+    SECTION,
+    ST_FOUND,
+    ST_KOUT,
+    ST_ROLLBACKS,
+    ST_TCOMP,
+    ST_WANTED,
     STATUS_BUFFER_FULL,
     STATUS_MAX_STEPS,
     STATUS_OK,
     STATUS_PAUSED,
     STATUS_STEP_TOO_SMALL,
     N,
+    crosses,
     f,
+    grid_sample_adaptive,
+    henon_crossing,
     post_step,
     project,
     record_row,
+    section_event,
+    section_g_0,
     store,
     to_tuple,
     to_tuple_shift,
@@ -106,6 +119,16 @@ def step(y, h, par, ws):
     return to_tuple_shift(y, 1.0, to_tuple(ws[0])), nfev, 0.0, STATUS_OK
 
 
+def partial_adaptive(y, fy, sigma, par, T, kc):
+    """odex's own step of size sigma with the kc lines of the accepted step (T_kc,kc, order 2 kc;
+    the tableau T is scratch between steps): a partial step for the time grid."""
+    nfev = 0.0
+    for j in range(1, kc + 1):
+        nfev += gragg_column(y, fy, sigma, NJ[j - 1], par, T, j - 1, False, 0.0, 0.0)
+        neville(T, j)
+    return to_tuple_shift(y, 1.0, to_tuple(T[0])), nfev, 0.0, STATUS_OK
+
+
 def column(j, y, fy, h, hmax, par, T, hh, w, rtol, atol, errold):
     """ODEX's MIDEX: line j of the tableau, its error and optimal step H_j and work W_j.
 
@@ -153,17 +176,23 @@ def integrate_adaptive(y_io, st, par, t_end, h0, hmax, rtol, atol, every, dt_out
         st[2] = max(2, min(KMAX - 1, int(-math.log10(rtol + 1.0e-40) * 0.6 + 1.5)))
         st[3] = 0.0
         st[7] = 1.0
-        record_row(out_t, out_y, out_c, 0, 0.0, y, 0.0, st[6], 0.0, 0.0)
-        row = 1
+        if not SECTION:                    # a section run writes crossings only
+            record_row(out_t, out_y, out_c, 0, 0.0, y, 0.0, st[6], 0.0, 0.0)
+            row = 1
+        if GRID:
+            st[ST_KOUT] = every
     else:
         fy = to_tuple(y_io[1])
     t, h, k = st[0], st[1], int(st[2])
     reject = st[3] != 0.0
     nacc, nrej, nfev = int(st[4]), int(st[5]), st[6]
+    kout = int(st[ST_KOUT]) if GRID else 0
+    tc = int(st[ST_TCOMP]) if GRID else -1
+    g0 = section_g_0(y, par) if SECTION else 0.0
     status = STATUS_OK
     stop = nacc + nrej + budget              # attempts in this call (STATUS_PAUSED after them)
     while True:
-        if row >= rows:
+        if row >= rows or (GRID and rows - row < 2):
             status = STATUS_BUFFER_FULL
             break
         if nacc + nrej >= max_steps:
@@ -172,6 +201,8 @@ def integrate_adaptive(y_io, st, par, t_end, h0, hmax, rtol, atol, every, dt_out
         if nacc + nrej >= stop:
             status = STATUS_PAUSED
             break
+        # the state before this attempt: a gridded step whose samples do not fit is redone
+        h_start, k_start, reject_start, nrej_start, nfev_start = h, k, reject, nrej, nfev
         h = min(h, hmax)
         if 0.1 * abs(h) <= abs(t) * 2.220446049250313e-16 or not h > 0.0:
             status = STATUS_STEP_TOO_SMALL
@@ -257,7 +288,11 @@ def integrate_adaptive(y_io, st, par, t_end, h0, hmax, rtol, atol, every, dt_out
             status = pst
             break
         nacc += 1
+        t_old = t
+        h_acc = h
         t = t_end if last else t + h
+        y_old = y
+        fy_old = fy
         y = post_step(y1, par)
         fy = f(y, par)
         nfev += 1.0
@@ -289,14 +324,64 @@ def integrate_adaptive(y_io, st, par, t_end, h0, hmax, rtol, atol, every, dt_out
             else:
                 h = hh[kc - 1] * WORK_A[kopt - 1] / WORK_A[kc - 1]
             k = kopt
-        if nacc % every == 0 or last:
+        if SECTION:
+            g1 = section_g_0(y, par)
+            if crosses(g0, g1):
+                ys, ts, nf = henon_crossing(y_old, t_old, t, par, st)
+                nfev += nf
+                row += section_event(ys, ts, par, st, out_t, out_y, out_c, row, nacc, nfev, 0.0,
+                                     nrej)
+                if st[ST_FOUND] >= st[ST_WANTED]:
+                    break
+            g0 = g1
+        elif GRID:
+            # samples at t_k = k dt_out in this step by partial steps with the kc lines of this
+            # step (methods/kernels/events.py); redone by the next call when they do not fit
+            t_hi = t if tc < 0 else y[tc]
+            tol = GRID_ULPS * 2.220446049250313e-16 * abs(t_hi)
+            row_start = row
+            kout_start = kout
+            full = False
+            tk = kout * dt_out
+            while kout < n_out and (tk < t_hi - tol or (not last and tk <= t_hi + tol)):
+                if row >= rows - 1:
+                    full = True
+                    break
+                yk, sk, nf, _, s = grid_sample_adaptive(y_old, fy_old, t_old, y, t, h_acc,
+                                                        tk, tc, par, T, kc)
+                nfev += nf
+                if s != STATUS_OK:
+                    status = s
+                    break
+                record_row(out_t, out_y, out_c, row, sk, yk, nacc, nfev, 0.0, nrej)
+                row += 1
+                kout += every
+                tk = kout * dt_out
+            if full:                       # redo this step in the next call, with a new buffer
+                y = y_old
+                fy = fy_old
+                t = t_old
+                h, k, reject, nrej, nfev = h_start, k_start, reject_start, nrej_start, nfev_start
+                nacc -= 1
+                kout = kout_start
+                row = row_start
+                st[ST_ROLLBACKS] += 1.0
+                status = STATUS_BUFFER_FULL
+                break
+            if status != STATUS_OK:
+                break
+            if last:
+                record_row(out_t, out_y, out_c, row, t, y, nacc, nfev, 0.0, nrej)
+                row += 1
+                st[8] = nacc
+        elif nacc % every == 0 or last:
             record_row(out_t, out_y, out_c, row, t, y, nacc, nfev, 0.0, nrej)
             row += 1
             st[8] = nacc
         if last:
             break
-    if status != STATUS_OK and status != STATUS_BUFFER_FULL and status != STATUS_PAUSED \
-            and nacc > st[8] and row < rows:
+    if not SECTION and status != STATUS_OK and status != STATUS_BUFFER_FULL \
+            and status != STATUS_PAUSED and nacc > st[8] and row < rows:
         record_row(out_t, out_y, out_c, row, t, y, nacc, nfev, 0.0, nrej)
         row += 1
     store(y, y_io, 0)
@@ -304,4 +389,6 @@ def integrate_adaptive(y_io, st, par, t_end, h0, hmax, rtol, atol, every, dt_out
     st[0], st[1], st[2] = t, h, k
     st[3] = 1.0 if reject else 0.0
     st[4], st[5], st[6] = nacc, nrej, nfev
+    if GRID:
+        st[ST_KOUT] = kout
     return status, row

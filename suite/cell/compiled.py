@@ -9,19 +9,23 @@ apart from the integration.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from types import ModuleType
 
 import numpy as np
+from gnibench.methods.kernels.slots import ST_WANTED
+from gnibench.methods.kernels.slots import STATE as SLOT_STATE
+from gnibench.suite.cell.calls import COUNTERS
 from gnibench.suite.cell.codegen import load, load_problem, record_compiled
 from gnibench.suite.foundation.params import Bound
 
-#: length of ``st``, the resumable state of the adaptive drivers (methods/kernels/adaptive.py)
+#: length of ``st``, the resumable state of every compiled driver (methods/kernels/slots.py); the
+#: plain drivers use its first ADAPTIVE_STATE (adaptive) or FIXED_STATE (fixed step) slots
+STATE = SLOT_STATE
 ADAPTIVE_STATE = 10
-#: length of ``st``, the resumable state of the fixed-step driver (methods/kernels/driver.py)
 FIXED_STATE = 5
-#: counter columns of the output buffer: steps, nfev, njev, rejected, size of the last step
-COUNTERS = 5
+#: the drivers of the fixed-step family (methods/kernels/driver.py); the others are adaptive
+FIXED_DRIVERS = ("integrate", "integrate_grid", "integrate_section")
 
 
 @dataclass
@@ -40,6 +44,7 @@ class CompiledCell:
     y0: tuple[float, ...]
     H0: tuple[float, ...]
     compile_seconds: float
+    warm: set = field(default_factory=set)     # drivers already loaded or compiled and run once
 
     @property
     def cache_misses(self) -> int:
@@ -81,24 +86,28 @@ def problem_kernel(problem: Bound) -> ProblemKernel:
 _cells: dict[tuple[str, str], CompiledCell] = {}
 
 
-def compile_cell(problem: Bound, method) -> CompiledCell:
-    """Load the cell's kernels, build ``par``, and warm up the driver the cell runs.
+def compile_cell(problem: Bound, method, driver: str | None = None) -> CompiledCell:
+    """Load the cell's kernels, build ``par``, and warm up the driver the cell runs (by default the
+    plain one, :func:`plain_driver`); ``compile_seconds`` is what this call took.
 
     A cell compiled once in this process is kept (keyed by its canonical specs, which fix its
     module text and ``par``): a worker that runs many cells of one kernel loads it once."""
+    driver = driver or plain_driver(method)
     key = (problem.text(), method.text())
     t0 = time.perf_counter()
-    if key in _cells:
-        return replace(_cells[key], compile_seconds=time.perf_counter() - t0)
-    cell = _compile(problem, method)
-    _cells[key] = cell
-    return cell
+    if key not in _cells:
+        _cells[key] = _compile(problem, method)
+    cell = _cells[key]
+    if driver not in cell.warm:
+        warm_up(cell, driver, problem.record.dim, method)
+        cell.warm.add(driver)
+        record_compiled(cell.kernel, cell.problem_kernel)
+    return replace(cell, compile_seconds=time.perf_counter() - t0)
 
 
 def _compile(problem: Bound, method) -> CompiledCell:
     rec = problem.record
     y0 = tuple(rec.y0(problem.values))
-    t0 = time.perf_counter()
     kernel, _, _ = load(problem, method)
     pk = problem_kernel(problem)
     h0_all = pk.at(y0)
@@ -108,27 +117,31 @@ def _compile(problem: Bound, method) -> CompiledCell:
         extra.extend(m.record.runtime(m.values, [h0_all[k] for k in idx]))
     par = np.concatenate([pk.par, np.array(extra, dtype=np.float64)])
     cell = CompiledCell(kernel, pk.kernel, pk.integral_names, pk.par, par, y0, h0_all, 0.0)
-    warm_up(cell, method, rec.dim)
     if pk.integral_names:
         pk.integrals(np.array([y0]))
-    record_compiled(kernel, pk.kernel)
-    cell.compile_seconds = time.perf_counter() - t0
     return cell
 
 
-def warm_up(cell: CompiledCell, method, dim: int) -> None:
-    """One step on scratch arrays: loads (or compiles) the driver the cell runs and all it calls
-    (with dt_out, the dense-output driver)."""
+def plain_driver(method) -> str:
+    """The driver of a cell sampled every K steps (with the method option dt_out of dopri5/dop853,
+    its dense-output grid driver)."""
+    if not method.base.values.get("adaptive"):
+        return "integrate"
+    return "integrate_dense" if method.base.values.get("dt_out", 0.0) > 0.0 else "integrate_adaptive"
+
+
+def warm_up(cell: CompiledCell, driver: str, dim: int, method) -> None:
+    """One step of the named driver on scratch arrays: loads (or compiles) it and all it calls."""
     y_io = np.array([cell.y0, np.zeros(dim)], dtype=np.float64)
     out = (np.empty(3), np.empty((3, dim)), np.zeros((3, COUNTERS)))
-    if method.base.values.get("adaptive"):
-        dense = method.base.values.get("dt_out", 0.0) > 0.0
-        drive = cell.kernel.integrate_dense if dense else cell.kernel.integrate_adaptive
-        drive(y_io, np.zeros(ADAPTIVE_STATE), cell.par, 1.0, 1e-3, 1.0, 1e-3, 1e-3, 1, 0.5, 2, 1, 1,
-              *out)
-    else:
+    st = np.zeros(STATE)
+    st[ST_WANTED] = 1.0
+    fn = getattr(cell.kernel, driver)
+    if driver in FIXED_DRIVERS:
         h = float(method.base.values.get("h", 0.01))
-        cell.kernel.integrate(y_io, np.zeros(FIXED_STATE), cell.par, h, 1, h, 1, 1, *out)
+        fn(y_io, st, cell.par, h, 1, h, 1, 0.5 * h, 1, 1, *out)
+    else:
+        fn(y_io, st, cell.par, 1.0, 1e-3, 1.0, 1e-3, 1e-3, 1, 0.5, 2, 1, 1, *out)
 
 
 def dense_output_refusal(problem: Bound, method) -> str:

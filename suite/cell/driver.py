@@ -5,36 +5,35 @@
 
 * compiled fixed-step methods (``methods/kernels/driver.py``), and compiled adaptive methods
   (embedded pairs with Hairer's control, odex), sampled every K steps;
-* adaptive pairs with dense output on a time grid (``dt_out``; methods/dense_output.py);
-* Poincaré section crossings (``section=K``; :mod:`gnibench.suite.cell.sections`);
+* samples on a time grid t_k = k dt_out for every compiled method (``dt_out``: dense output or
+  partial steps, :mod:`gnibench.suite.cell.timegrid`);
+* Poincaré section crossings (``section=K``), found and located inside the compiled drivers
+  (:mod:`gnibench.suite.cell.sections`);
 * external engines (heyoka, rebound: ``Method.run``);
 * transformed problems (K-S, [B] (5.4)): the transformed system is integrated and its samples
   mapped back;
 * the benchmark loop (``gnibench bench``: ``budget=None``, one call of the compiled driver).
 
-The compiled drivers are resumable: the facade calls them until they are done, with a work budget
-per call tuned so that one call lasts about ``CALL_SECONDS`` (progress reports and Ctrl-C are
-handled between calls, so an interrupt stops any integration within a fraction of a second) and
-a new output buffer whenever one is full. Only the time spent inside the compiled calls counts as
-wall time.
+The compiled drivers are resumable: the facade calls them until they are done
+(:mod:`gnibench.suite.cell.calls`), with a work budget per call tuned so that one call lasts about
+``CALL_SECONDS`` and a new output buffer whenever one is full.
 """
 from __future__ import annotations
 
-import time
-from collections.abc import Callable
-
 import numpy as np
+from gnibench.methods.kernels.slots import ST_ROLLBACKS, ST_TCOMP
+from gnibench.suite.cell.calls import COUNTERS, UNLIMITED, Buffers, Progress, run_driver
 from gnibench.suite.cell.compiled import (
-    ADAPTIVE_STATE,
-    COUNTERS,
-    FIXED_STATE,
+    FIXED_DRIVERS,
+    STATE,
     CompiledCell,
     compile_cell,
-    dense_output_refusal,
+    plain_driver,
     problem_kernel,
 )
 from gnibench.suite.cell.grid import SampleGrid, grid, grid_step
 from gnibench.suite.cell.sections import integrate_section
+from gnibench.suite.cell.timegrid import check_dt_out, effective_dt_out, engine_method, plan
 from gnibench.suite.cell.trajectory import ReferenceSamples, Trajectory
 from gnibench.suite.foundation.budgets import check_count, check_integer, check_output
 from gnibench.suite.foundation.errors import UserError
@@ -42,12 +41,10 @@ from gnibench.suite.foundation.params import Bound
 from gnibench.suite.foundation.provenance import versions
 from gnibench.suite.foundation.status import Status
 
-CALL_SECONDS = 0.1          # target duration of one call of a compiled driver
-FIRST_BUDGET = 256          # steps (attempts) in the first call, then scaled to CALL_SECONDS
-ADAPTIVE_CHUNK = 4096       # rows of one output buffer of an adaptive driver
-UNLIMITED = 1 << 62
+__all__ = ["UNLIMITED", "Interrupted", "attach_reference", "integrate"]
 
-Progress = Callable[[float], None]
+ADAPTIVE_CHUNK = 4096       # rows of one output buffer of an adaptive driver
+GRID_ROWS = 10**7           # at most this many rows in one buffer of a time grid
 
 
 class Interrupted(KeyboardInterrupt):
@@ -59,8 +56,8 @@ class Interrupted(KeyboardInterrupt):
 
 
 def integrate(problem: Bound, method, *, steps: int | None = None, t_end: float | None = None,
-              every: int = 1, section: int | None = None, locator: str | None = None,
-              reference=None, progress: Progress | None = None,
+              every: int = 1, dt_out: float | None = None, section: int | None = None,
+              locator: str | None = None, reference=None, progress: Progress | None = None,
               budget: int | None = 0) -> Trajectory:
     """Integrate one cell; bad input raises UserError, divergence is a status.
 
@@ -73,44 +70,53 @@ def integrate(problem: Bound, method, *, steps: int | None = None, t_end: float 
         The horizon: exactly one of them (``t_end``: the last step lands exactly on it).
     every:
         A sample every K steps (or every K-th point of a ``dt_out`` grid), plus the final point.
+    dt_out:
+        Samples at t = k dt_out (k = 0, every, 2 every, ...) plus the final point, located exactly
+        for every compiled method (dense output or a partial step; :mod:`.timegrid`); external
+        engines sample on their own ``dt_out`` grid, which this sets.
     section, locator:
         Integrate until ``section`` crossings of the problem's Poincaré section and return
-        the located crossings (``locator``: None, ``dense`` or ``henon``).
+        the located crossings (``locator``: None, ``dense`` or ``henon``; :mod:`.sections`).
     reference:
         A :class:`~gnibench.suite.cell.reference.ReferenceSpec` (or None): its samples at the
         trajectory's times are attached to the trajectory.
     progress:
-        Called with the fraction of the horizon done, between calls of the compiled driver.
+        Called between calls of the compiled driver with the fraction done (sections: the larger
+        of crossings found / K and t / t_end).
     budget:
         Steps per call of a compiled driver: 0 tunes it to ``CALL_SECONDS`` a call, None does
         the whole horizon in one call (the benchmark loop).
     """
     check_integer(every, "--every")
-    check_budgets(problem, method, steps, t_end, every, section)
+    dt_out = check_dt_out(dt_out)
+    check_budgets(problem, method, steps, t_end, every, section, dt_out)
+    external = getattr(method.base.record, "run", None) is not None
+    transformed = problem.record.transformed(problem.values)
     if section is not None:
+        if dt_out is not None or (not external and effective_dt_out(method, None) is not None):
+            raise UserError("--dt-out (or the method option dt_out) does not apply with "
+                            "--section (the section points are written)")
         samples = None
-        external = getattr(method.base.record, "run", None) is not None
-        if external or problem.record.transformed(problem.values) is not None:
+        if external or transformed is not None:
             samples = integrate(problem, method, steps=steps, t_end=t_end, every=1,
                                 progress=progress, budget=budget)
-        return integrate_section(problem, method, section, steps=steps, t_end=t_end,
-                                 locator=locator, progress=progress, samples=samples)
-    h = grid_step(method)
-    nsteps, h_last = grid(h, steps, t_end)
-    transformed = problem.record.transformed(problem.values)
-    if getattr(method.base.record, "run", None) is not None:
+        traj = integrate_section(problem, method, section, steps=steps, t_end=t_end,
+                                 locator=locator, progress=progress, samples=samples,
+                                 budget=budget)
+    elif external:
         if transformed is not None:
             raise UserError(f"{method.base.id} is an external engine; it cannot integrate the "
                             f"transformed system of {problem.id} (drop the transform option)")
+        if dt_out is not None:
+            method = engine_method(method, dt_out, problem)
+        h = grid_step(method)
+        nsteps, h_last = grid(h, steps, t_end)
         traj = _external(problem, method, SampleGrid(h, nsteps, h_last, every))
     elif transformed is not None:
-        if method.base.values.get("adaptive") and method.base.values.get("dt_out", 0.0) > 0.0:
-            raise UserError(f"dt_out spaces a grid in the integrated system's time, which for the "
-                            f"transformed system of {problem.id} is not t (drop dt_out or the "
-                            f"transform option)")
-        traj = _transformed(problem, transformed, method, steps, t_end, every, progress, budget)
+        traj = _transformed(problem, transformed, method, steps, t_end, every, dt_out, progress,
+                            budget)
     else:
-        traj = _compiled(problem, method, steps, t_end, every, progress, budget)
+        traj = _compiled(problem, method, steps, t_end, every, progress, budget, dt_out)
     if traj.status is Status.INTERRUPTED:
         traj.reason = f"interrupted by the user at t = {traj.t[-1]:.17g}" if len(traj.t) else \
             "interrupted by the user"
@@ -120,14 +126,15 @@ def integrate(problem: Bound, method, *, steps: int | None = None, t_end: float 
     return traj
 
 
-def check_budgets(problem: Bound, method, steps, t_end, every, section) -> None:
+def check_budgets(problem: Bound, method, steps, t_end, every, section, dt_out=None) -> None:
     """Refuse, before any work, a cell beyond the budgets (:mod:`gnibench.suite.foundation.budgets`):
     steps of a fixed-step method, output rows and their memory."""
     v = method.base.values
     h = grid_step(method)
-    nsteps, _ = grid(h, steps, t_end)
+    nsteps, h_last = grid(h, steps, t_end)
     columns = problem.record.dim + COUNTERS + 1
     external = getattr(method.base.record, "run", None) is not None
+    transformed = problem.record.transformed(problem.values) is not None
     adaptive = bool(v.get("adaptive"))
     what = f"{problem.text()} {method.text()}"
     if adaptive:
@@ -138,9 +145,10 @@ def check_budgets(problem: Bound, method, steps, t_end, every, section) -> None:
         check_integer(section, "--section")
         check_output(section, columns, what)
         return
-    dt_out = float(v.get("dt_out", 0.0) or 0.0) if adaptive else 0.0
-    if dt_out > 0.0 and t_end is not None:
-        check_output(t_end / dt_out / every + 2, columns, what)
+    spacing = None if external or transformed else effective_dt_out(method, dt_out)
+    t_final = t_end if t_end is not None else (nsteps - 1) * h + h_last
+    if spacing is not None and not adaptive or spacing is not None and t_end is not None:
+        check_output(t_final / spacing / every + 2, columns, what)
     elif not adaptive:
         check_output(nsteps / every + 2, columns, what)
 
@@ -156,76 +164,10 @@ def attach_reference(traj: Trajectory, problem: Bound, reference) -> None:
                                               "seconds": sol.seconds})
 
 
-# -- calling a resumable compiled driver --------------------------------------------------------
-
-class Buffers:
-    """Output buffers of a compiled driver: the rows written so far, and views with room left."""
-
-    def __init__(self, rows: int, dim: int, grow: bool):
-        self.dim, self.grow, self.chunks = dim, grow, []
-        self._new(rows)
-
-    def _new(self, rows: int) -> None:
-        self.t, self.y = np.empty(rows), np.empty((rows, self.dim))
-        self.c = np.zeros((rows, COUNTERS))
-        self.row = 0
-        self.chunks.append(self)
-
-    def views(self):
-        r = self.row
-        return self.t[r:], self.y[r:], self.c[r:]
-
-    def advance(self, rows: int) -> None:
-        self.row += rows
-
-    def full(self) -> None:
-        """The driver asked for room (BUFFER_FULL): keep what is written, start a new buffer."""
-        if not self.grow:
-            raise RuntimeError("compiled driver: output buffer too small (sized for the horizon)")
-        kept = Buffers.__new__(Buffers)
-        kept.t, kept.y, kept.c = self.t[:self.row], self.y[:self.row], self.c[:self.row]
-        self.chunks[-1] = kept
-        self._new(len(self.t))
-
-    def arrays(self):
-        parts = self.chunks[:-1] + [self]
-        t = np.concatenate([p.t[:p.row] if p is self else p.t for p in parts])
-        y = np.concatenate([p.y[:p.row] if p is self else p.y for p in parts])
-        c = np.concatenate([p.c[:p.row] if p is self else p.c for p in parts])
-        return t, y, c
-
-
-def run_driver(call: Callable, buffers: Buffers, fraction: Callable[[], float],
-               progress: Progress | None, budget: int | None) -> tuple[Status, float]:
-    """Call a resumable driver (``call(budget, out_t, out_y, out_c) -> (code, rows)``) until it
-    returns a final status; return it and the seconds spent inside the calls."""
-    wall = 0.0
-    b = UNLIMITED if budget is None else (budget or FIRST_BUDGET)
-    while True:
-        try:
-            t0 = time.perf_counter()
-            code, rows = call(b, *buffers.views())
-            dt = time.perf_counter() - t0
-            wall += dt
-            buffers.advance(int(rows))
-        except KeyboardInterrupt:
-            return Status.INTERRUPTED, wall
-        status = Status.from_code(int(code))
-        if status is Status.BUFFER_FULL:
-            if rows == 0 and buffers.row == 0:
-                raise RuntimeError("compiled driver: output buffer too small for one step")
-            buffers.full()
-        elif status is not Status.PAUSED:
-            return status, wall
-        if progress is not None:
-            progress(fraction())
-        if budget == 0 and status is Status.PAUSED:      # tune the next call to CALL_SECONDS
-            scale = CALL_SECONDS / max(dt, 1e-6)
-            b = int(min(max(b * min(scale, 8.0), b / 4.0, 16), UNLIMITED))
-
-
-def _compiled(problem, method, steps, t_end, every, progress, budget) -> Trajectory:
-    """A compiled cell: the fixed-step driver, or the adaptive one (with dense output on a grid)."""
+def _compiled(problem, method, steps, t_end, every, progress, budget, dt_out=None,
+              tcomp=-1) -> Trajectory:
+    """A compiled cell: the fixed-step driver or the adaptive one, sampled every K steps or on a
+    time grid (``tcomp`` >= 0: the grid's time is that state component, :mod:`.timegrid`)."""
     v = method.base.values
     adaptive = bool(v.get("adaptive"))
     h = grid_step(method)
@@ -233,70 +175,65 @@ def _compiled(problem, method, steps, t_end, every, progress, budget) -> Traject
     if adaptive and t_end is None:
         raise UserError(f"{method.base.id} with adaptive=true needs --t-end T (not --steps); "
                         f"for fixed steps use {method.base.id}:adaptive=false,h=...")
-    if adaptive and v.get("dt_out", 0.0) > 0.0:
-        why = dense_output_refusal(problem, method)
-        if why:
-            raise UserError(f"dt_out needs dense output, which does not apply here: {why}; "
-                            f"use --every K instead")
-    cell = compile_cell(problem, method)
+    dt_out = effective_dt_out(method, dt_out)
+    t_final = float(t_end) if adaptive else (nsteps - 1) * h + h_last
+    gp = None if dt_out is None else plan(problem, method, dt_out, t_final, tcomp)
+    name = plain_driver(method) if gp is None else gp.driver
+    cell = compile_cell(problem, method, name)
+    fn = getattr(cell.kernel, name)
+    y_io = np.array([cell.y0, np.zeros(len(cell.y0))], dtype=np.float64)
+    st = np.zeros(STATE)
+    st[ST_TCOMP] = -1.0 if gp is None else gp.tcomp
+    d_out, n_out = (0.0, 0) if gp is None else (gp.dt_out, gp.n_out)
+    if gp is not None:             # the whole grid in one buffer (a step may hold many points)
+        rows = min(-(-min(n_out, GRID_ROWS) // every) + 3 if gp.tcomp < 0 else ADAPTIVE_CHUNK,
+                   GRID_ROWS)
+    else:
+        rows = ADAPTIVE_CHUNK if adaptive else SampleGrid(h, nsteps, h_last, every).rows + 1
+    buffers = Buffers(rows, problem.record.dim, grow=adaptive or gp is not None)
+    if name in FIXED_DRIVERS:
+        def call(b, out_t, out_y, out_c):
+            return fn(y_io, st, cell.par, h, nsteps, h_last, every, d_out, n_out, b,
+                      out_t, out_y, out_c)
+
+        def fraction():
+            return st[0] / nsteps
+    else:
+        hmax = v["hmax"] if v["hmax"] > 0 else t_end
+
+        def call(b, out_t, out_y, out_c):
+            return fn(y_io, st, cell.par, t_end, v["h0"], hmax, v["rtol"], v["atol"], every,
+                      d_out, n_out, v["max_steps"], b, out_t, out_y, out_c)
+
+        def fraction():
+            return st[0] / t_end
+    status, wall = run_driver(call, buffers, fraction, progress, budget)
     if adaptive:
-        return _adaptive(problem, method, cell, float(t_end), every, progress, budget)
-    y_io = np.array([cell.y0, np.zeros(len(cell.y0))], dtype=np.float64)
-    st = np.zeros(FIXED_STATE)
-    sg = SampleGrid(h, nsteps, h_last, every)
-    buffers = Buffers(sg.rows + 1, problem.record.dim, grow=False)
-
-    def call(b, out_t, out_y, out_c):
-        return cell.kernel.integrate(y_io, st, cell.par, h, nsteps, h_last, every, b,
-                                     out_t, out_y, out_c)
-
-    status, wall = run_driver(call, buffers, lambda: st[0] / nsteps, progress, budget)
-    done = int(st[0])
-    reason = ""
-    if status is Status.NONFINITE:
-        reason = f"state overflowed or became NaN at step {done + 1}"
-    elif status is Status.NEWTON_FAILED:
-        reason = (f"Newton (or the projection) did not converge at step {done + 1}; raise "
-                  f"newton_maxit (now {v.get('newton_maxit', '-')}) or lower h")
-    return _trajectory(problem, method, cell, buffers, status, reason, wall,
-                       {"h": h, "nsteps": nsteps, "h_last": h_last, "every": every})
-
-
-def _adaptive(problem, method, cell: CompiledCell, t_end, every, progress, budget) -> Trajectory:
-    """Adaptive embedded RK and odex: the resumable driver fills buffers until t_end.
-
-    With ``dt_out`` > 0 the samples are the grid k dt_out (every ``every``-th point) plus t_end,
-    spaced as the external engines space theirs (:class:`SampleGrid`), filled by dense output."""
-    v = method.base.values
-    dt_out = float(v.get("dt_out", 0.0))
-    n_out, grid_meta = 0, {}
-    if dt_out > 0.0:
-        n_out, _ = grid(dt_out, None, t_end)
-        dense = method.base.record.data.dense
-        grid_meta = {"dense_output": {"dt_out": dt_out, "grid_intervals": n_out,
-                                      "order": dense.order, "extension": dense.reference,
-                                      "extra_f_per_dense_step": dense.extra_stages}}
-    y_io = np.array([cell.y0, np.zeros(len(cell.y0))], dtype=np.float64)
-    st = np.zeros(ADAPTIVE_STATE)
-    hmax = v["hmax"] if v["hmax"] > 0 else t_end
-    # dense output: the whole grid in one buffer (a step may hold many grid points)
-    rows = ADAPTIVE_CHUNK if dt_out == 0.0 else -(-n_out // every) + 3
-    drive = cell.kernel.integrate_dense if dt_out > 0.0 else cell.kernel.integrate_adaptive
-    buffers = Buffers(rows, problem.record.dim, grow=True)
-
-    def call(b, out_t, out_y, out_c):
-        return drive(y_io, st, cell.par, t_end, v["h0"], hmax, v["rtol"], v["atol"], every,
-                     dt_out, n_out, v["max_steps"], b, out_t, out_y, out_c)
-
-    status, wall = run_driver(call, buffers, lambda: st[0] / t_end, progress, budget)
-    reason = {Status.MAX_STEPS: f"more than max_steps={v['max_steps']} steps before t = {t_end:g}",
-              Status.STEP_TOO_SMALL: f"step size underflow at t = {st[0]:.17g} (stiff, or "
-                                     f"diverging)",
-              Status.NEWTON_FAILED: f"the projection did not converge at t = {st[0]:.17g}",
-              }.get(status, "")
-    return _trajectory(problem, method, cell, buffers, status, reason, wall,
-                       {"h": v["h0"], "t_end": t_end, "every": every, "accepted": int(st[4]),
-                        "rejected": int(st[5]), **grid_meta})
+        reason = {Status.MAX_STEPS: f"more than max_steps={v['max_steps']} steps before t = "
+                                    f"{t_end:g}",
+                  Status.STEP_TOO_SMALL: f"step size underflow at t = {st[0]:.17g} (stiff, or "
+                                         f"diverging)",
+                  Status.NEWTON_FAILED: f"the projection did not converge at t = {st[0]:.17g}",
+                  }.get(status, "")
+        meta = {"h": v["h0"], "t_end": t_end, "every": every, "accepted": int(st[4]),
+                "rejected": int(st[5])}
+    else:
+        done = int(st[0])
+        reason = {Status.NONFINITE: f"state overflowed or became NaN at step {done + 1}",
+                  Status.NEWTON_FAILED: f"Newton (or the projection) did not converge at step "
+                                        f"{done + 1}; raise newton_maxit (now "
+                                        f"{v.get('newton_maxit', '-')}) or lower h"}.get(status, "")
+        meta = {"h": h, "nsteps": nsteps, "h_last": h_last, "every": every}
+    if gp is not None:
+        time_name = "t" if gp.tcomp < 0 else problem.record.state[gp.tcomp]
+        meta["time_grid"] = gp.describe(every, time_name, st[ST_ROLLBACKS])
+        if gp.locator == "dense output":
+            dense = method.base.record.data.dense
+            meta["dense_output"] = {"dt_out": gp.dt_out,
+                                    "grid_intervals": meta["time_grid"]["grid_intervals"],
+                                    "order": dense.order, "extension": dense.reference,
+                                    "extra_f_per_dense_step": dense.extra_stages}
+    return _trajectory(problem, method, cell, buffers, status, reason, wall, meta)
 
 
 def _trajectory(problem, method, cell: CompiledCell, buffers: Buffers, status, reason, wall,
@@ -316,16 +253,23 @@ def _trajectory(problem, method, cell: CompiledCell, buffers: Buffers, status, r
                     "numba_cache_misses": cell.cache_misses})
 
 
-def _transformed(problem, transformed, method, steps, t_end, every, progress, budget):
-    """Integrate the transformed problem (e.g. K-S), then map its samples back to (t, y)."""
-    inner = _compiled(transformed, method, steps, t_end, every, progress, budget)
-    t, y = problem.record.transform.back(inner.y, problem.values)
+def _transformed(problem, transformed, method, steps, t_end, every, dt_out, progress, budget):
+    """Integrate the transformed problem (e.g. K-S), then map its samples back to (t, y); a time
+    grid is in the original time, the transformed system's state component ``Transform.time``."""
+    tr = problem.record.transform
+    tcomp = -1
+    if dt_out is not None or effective_dt_out(method, None) is not None:
+        if tr.time is None:
+            raise UserError(f"bad --dt-out for {problem.id} with {tr.option}=true: the transformed "
+                            f"system has no time component; allowed: --every K")
+        tcomp = transformed.record.state.index(tr.time)
+    inner = _compiled(transformed, method, steps, t_end, every, progress, budget, dt_out, tcomp)
+    t, y = tr.back(inner.y, problem.values)
     pk = problem_kernel(problem)
     y0 = tuple(problem.record.y0(problem.values))
     prov = {**inner.provenance, "y0": list(y0), "H0": list(pk.at(y0)),
-            "transform": {"option": problem.record.transform.option,
-                          "problem": transformed.text(), "s": inner.t.tolist()[-1:],
-                          "doc": problem.record.transform.doc}}
+            "transform": {"option": tr.option, "problem": transformed.text(),
+                          "s": inner.t.tolist()[-1:], "doc": tr.doc}}
     return Trajectory(
         problem=problem.text(), method=method.text(), state_names=problem.record.state,
         t=np.ascontiguousarray(t), y=np.ascontiguousarray(y), steps=inner.steps, nfev=inner.nfev,

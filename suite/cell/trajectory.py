@@ -43,7 +43,9 @@ class Trajectory:
     steps, nfev, njev, rejected:
         Cumulative counters at each sample: accepted steps, evaluations of the vector field,
         Jacobian evaluations, rejected steps (adaptive methods). ``nfev`` is NaN where an engine
-        does not expose it (heyoka, IAS15).
+        does not expose it (heyoka, IAS15). It includes the partial steps of a time grid and the
+        locators' evaluations of section crossings (whose counters are those of the step that
+        holds the crossing).
     integral_names, integrals, H0:
         The problem's first integrals I_k(y) at every sample, and I_k(y0).
     status, reason:

@@ -70,6 +70,11 @@ def _parser() -> argparse.ArgumentParser:
     g.add_argument("--steps", type=int, help="number of steps N")
     g.add_argument("--t-end", type=float, help="final time T (last step shortened to land on T)")
     s.add_argument("--every", type=int, default=1, help="sample every K steps (plus the final point)")
+    s.add_argument("--dt-out", type=float, metavar="D",
+                   help="sample at t = k*D (every K-th point with --every K) plus the final point, "
+                        "located exactly for every compiled method: dense output (dopri5, dop853) "
+                        "or a partial step of the method from the last step; the steps are those "
+                        "taken without it (suite/cell/timegrid.py)")
     s.add_argument("--format", choices=("csv", "json", "parquet"), default="csv")
     s.add_argument("-o", "--output", type=_path, help="output file (default: stdout)")
     s.add_argument("--reference", metavar="REF",
@@ -138,11 +143,15 @@ def _solve(a) -> int:
         if a.reference is not None:
             raise UserError("--reference does not apply with --section (no global error is "
                             "written)")
+        if a.dt_out is not None:
+            raise UserError("--dt-out does not apply with --section (the section points are "
+                            "written)")
     progress = SolveProgress(f"{a.problem} {a.method}")
     interrupted = None
     try:
         traj = solve(a.problem, a.method, steps=a.steps, t_end=a.t_end, every=a.every,
-                     reference=a.reference, section=a.section, progress=progress)
+                     reference=a.reference, section=a.section, dt_out=a.dt_out,
+                     progress=progress)
     except Interrupted as e:              # keep what was computed, then exit 130
         traj, interrupted = e.partial, e
     finally:

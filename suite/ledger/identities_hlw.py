@@ -34,7 +34,8 @@ def _forth_and_back(method: str, h: float, steps: int = 100) -> float:
     def run(y, hh):
         out = (np.empty(4), np.empty((4, 2)), np.zeros((4, 5)))
         y_io, st = np.array([y, np.zeros(2)], dtype=float), np.zeros(FIXED_STATE)
-        _, rows = cell.kernel.integrate(y_io, st, cell.par, hh, steps, hh, steps, 1 << 40, *out)
+        _, rows = cell.kernel.integrate(y_io, st, cell.par, hh, steps, hh, steps, 0.0, 0, 1 << 40,
+                                        *out)
         return out[1][rows - 1].copy()
 
     y0 = np.array(cell.y0)

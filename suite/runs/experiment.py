@@ -10,6 +10,7 @@ An experiment is a TOML file, given by path or by the name of one shipped in
     t_end = 10.0                     # default horizon of every group: t_end OR steps
     every = 1                        # default sampling: a sample every K steps (plus the last)
     metrics = ["growth:of=H"]        # optional: metrics beside the defaults (gnibench list metrics)
+    dt_out = 0.5                     # optional: samples at t = k dt_out (every K-th) plus the last
 
     [[cells]]                        # a group; the cells are problems x methods x vary values
     label    = "symplectic Euler"    # optional, shown in the summary
@@ -18,6 +19,7 @@ An experiment is a TOML file, given by path or by the name of one shipped in
     steps = 100                      # optional: replaces the top-level horizon for this group
     every = 1                        # optional
     metrics = ["precession"]         # optional: replaces the top-level metrics for this group
+    dt_out = 0.5                     # optional: replaces the top-level time grid for this group
     vary.h = [0.3, 0.15]             # a base-method option, one cell per value
     vary.problem.p0 = [0.7, 1.4]     # a problem option
     vary.observer.theta = [1, 15]    # an option of a modifier (only methods that have it)
@@ -47,9 +49,9 @@ from gnibench.suite.foundation.budgets import INT_LIMIT, check_count
 from gnibench.suite.foundation.errors import UserError, unknown
 from gnibench.suite.foundation.params import format_float
 
-TOP_KEYS = ("name", "title", "reference", "description", "t_end", "steps", "every", "metrics",
-            "cells")
-GROUP_KEYS = ("label", "problems", "methods", "t_end", "steps", "every", "metrics", "vary")
+TOP_KEYS = ("name", "title", "reference", "description", "t_end", "steps", "every", "dt_out",
+            "metrics", "cells")
+GROUP_KEYS = ("label", "problems", "methods", "t_end", "steps", "every", "dt_out", "metrics", "vary")
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]*$")
 
 
@@ -76,6 +78,7 @@ class Cell:
     nsteps: int
     t_final: float
     metrics: tuple[str, ...] = ()
+    dt_out: float | None = None     # time grid (suite/cell/timegrid.py); the specs stay as given
 
 
 @dataclass(frozen=True)
@@ -137,7 +140,7 @@ def parse_experiment(text: str, source: str) -> Experiment:
     groups = doc.get("cells")
     if not isinstance(groups, list) or not groups or not all(isinstance(g, dict) for g in groups):
         raise UserError(f"{source}: needs at least one [[cells]] group")
-    defaults = {k: doc[k] for k in ("t_end", "steps", "every") if k in doc}
+    defaults = {k: doc[k] for k in ("t_end", "steps", "every", "dt_out") if k in doc}
     planned = sum(_planned_cells(g, f"{source}: cells[{gi}]") for gi, g in enumerate(groups))
     check_count(planned, f"{source}", "GNIBENCH_MAX_CELLS", "cells")
     defaults["metrics"] = _metrics(doc, source)
@@ -146,7 +149,7 @@ def parse_experiment(text: str, source: str) -> Experiment:
         cells.extend(_expand(group, gi, defaults, f"{source}: cells[{gi}]", len(cells)))
     seen: dict[tuple, int] = {}
     for c in cells:
-        key = (c.problem, c.method, c.steps, c.t_end, c.every)
+        key = (c.problem, c.method, c.steps, c.t_end, c.every, c.dt_out)
         if key in seen:
             raise UserError(f"{source}: cell {c.id} ({c.problem} {c.method}) duplicates cell "
                             f"{seen[key]}; allowed: each cell once")
@@ -201,6 +204,17 @@ def _horizon(group: dict, defaults: dict, where: str) -> tuple[int | None, float
         t_end = float(t_end)
     every = _integer(group.get("every", defaults.get("every", 1)), "every", where)
     return steps, t_end, every
+
+
+def _dt_out(group: dict, defaults: dict, where: str) -> float | None:
+    """The time grid of a group (its own dt_out replaces the top-level one)."""
+    value = group.get("dt_out", defaults.get("dt_out"))
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not (
+            math.isfinite(value) and value > 0):
+        raise UserError(f"{where}: bad dt_out = {value!r}; allowed: a finite number > 0")
+    return float(value)
 
 
 def _integer(value, key: str, where: str) -> int:
@@ -308,6 +322,7 @@ def _expand(group: dict, gi: int, defaults: dict, where: str, first_id: int) -> 
     from gnibench.suite.cell.driver import check_budgets
     from gnibench.suite.cell.grid import grid, grid_step
     from gnibench.suite.cell.spec import prepare
+    from gnibench.suite.cell.timegrid import effective_dt_out, engine_method
 
     _keys(group, GROUP_KEYS, where)
     label = _text(group, "label", where, one_line=True)
@@ -316,6 +331,7 @@ def _expand(group: dict, gi: int, defaults: dict, where: str, first_id: int) -> 
     steps, t_end, every = _horizon(group, defaults, where)
     metrics = _metrics(group, where)
     metrics = (defaults.get("metrics") or ()) if metrics is None else metrics
+    dt_out = _dt_out(group, defaults, where)
     problem_vary, method_vary = _vary(group, where)
     for target, opt, _ in method_vary:
         modifiers = {part.partition(":")[0].strip() for m in methods for part in split_method(m)[1:]}
@@ -333,14 +349,19 @@ def _expand(group: dict, gi: int, defaults: dict, where: str, first_id: int) -> 
                 here = f"{where}: {pspec} {mspec}"
                 problem, method = prepare(pspec, mspec)
                 parsed_problems.append(problem)
+                external = getattr(method.base.record, "run", None) is not None
+                if dt_out is not None and external:     # an engine's dt_out is its own grid
+                    method = engine_method(method, dt_out, problem)
+                elif dt_out is not None:
+                    effective_dt_out(method, dt_out)      # refuses a conflicting method option
                 h = grid_step(method)
                 nsteps, h_last = grid(h, steps, t_end)
-                check_budgets(problem, method, steps, t_end, every, None)
+                check_budgets(problem, method, steps, t_end, every, None, dt_out)
             except UserError as e:
                 raise UserError(f"{here}: {e}") from None
             cells.append(Cell(first_id + len(cells), gi, label, pspec, mspec, problem.text(),
                               method.text(), h, steps, t_end, every, nsteps,
-                              (nsteps - 1) * h + h_last, metrics))
+                              (nsteps - 1) * h + h_last, metrics, dt_out=dt_out))
     _check_metrics(metrics, parsed_problems, where)
     return cells
 

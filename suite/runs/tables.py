@@ -76,7 +76,8 @@ def cell_row(cell, traj=None, metrics=None, status: str = "pending", reason: str
     row = {"cell": cell.id, "group": cell.group, "label": cell.label, "problem": cell.problem,
            "method": cell.method, "h": cell.h,
            "t_end": np.nan if cell.t_end is None else cell.t_end,
-           "steps_planned": cell.nsteps, "every": cell.every, "status": status, "reason": reason,
+           "steps_planned": cell.nsteps, "every": cell.every,
+           "dt_out": np.nan if cell.dt_out is None else cell.dt_out, "status": status, "reason": reason,
            "steps": None, "t_final": np.nan, "nfev": np.nan, "njev": np.nan, "samples": None,
            "integrals": "", "metrics": join_metrics(cell.metrics), "metric_notes": notes,
            "final_global_error": np.nan, "max_global_error": np.nan}
@@ -132,7 +133,7 @@ def samples_table(parts: list[tuple[pd.DataFrame, tuple[str, ...]]],
 
 
 _CELL_COLUMNS = ("cell", "group", "label", "problem", "method", "h", "t_end", "steps_planned",
-                 "every", "status", "reason", "steps", "t_final", "nfev", "njev", "samples",
+                 "every", "dt_out", "status", "reason", "steps", "t_final", "nfev", "njev", "samples",
                  "integrals", "metrics", "metric_notes")
 
 

@@ -1,0 +1,190 @@
+"""Generated event code of a cell: Hénon's trick, dense-output roots, grid and section helpers.
+
+The templates are in methods/kernels/events.py; this module writes what has to be unrolled for the
+cell's dimension and binds the templates' free names per driver family.
+
+**Hénon's trick** (Hénon 1982, Physica D 5, 412-414), generated as tuple code for one cell.
+
+To land on the section {g = 0} from a point (y, t) near it, integrate the augmented system in the
+independent variable g:
+
+    dy/dg = F(y) / (grad g . F(y)),   dt/dg = 1 / (grad g . F(y)),
+
+from g(y) to 0 in one stretch Δg = -g(y). F is the field the cell integrates (its compiled ``f``:
+the base field, or the modified one under +observer/+penalty, [B] (2.5), (2.10)); in a problem's
+own module (external engines, transformed problems) it is the base field ``base_f``. The
+integrator is DOP853's 8th-order solution (Hairer's coefficients, methods/dop853_coefficients.py)
+with m equal substeps, m doubled from 2 until two successive results agree to HENON_RTOL
+(|z_2m - z_m| <= HENON_RTOL max(1, |z_2m|) componentwise), at most HENON_MAX_SUBSTEPS. The located
+point is on the exact flow of F through (t, y) up to that agreement. (choice) The substeps are
+summed as the increment z - z0 with compensated (Kahan) summation: plain summation of z loses
+about m/2 ulps, so near tangencies, where m must grow, the two results never agreed to 1e-15 and m
+ran to the cap (measured: 11 of 7298 so(4) crossings at 4096 substeps, none with the compensated
+sum, whose largest m is 1024).
+
+The generator unrolls the 12 stages over the (N+1)-tuple (y, t), skipping zero coefficients, as
+methods/explicit_rk.py unrolls a tableau, so a location allocates nothing. It also writes the
+value/slope pairs that the Newton iterations on a continuous extension solve for
+(methods/kernels/events.py, ``dense_root``): ``sec_value``/``sec_slope`` (g and grad g . du/dθ)
+and ``time_value``/``time_slope`` (a state component minus the grid time t_k).
+"""
+from __future__ import annotations
+
+import numpy as np
+from gnibench.methods import dop853_coefficients as dop853
+from gnibench.methods.kernels import events
+from gnibench.methods.tableau import lit
+from gnibench.suite.foundation.templates import template
+
+HENON_RTOL = 1e-15            # agreement of the results with m and 2m substeps
+HENON_MAX_SUBSTEPS = 4096
+HENON_WALK_MAX = 256          # sub-intervals of the walk in time (16, 64, 256)
+STAGES = dop853.N_STAGES      # DOP853's 12 stages; its 8th-order solution B over them
+
+
+def event_constants() -> str:
+    """The numbers the event templates read (methods/kernels/events.py), for a module's header."""
+    return "".join(f"{k} = {getattr(events, k)!r}\n" for k in ("EPS", "DENSE_MAXIT", "SECANT_MAXIT"))
+
+
+def _tup(items: list[str]) -> str:
+    return "(" + ", ".join(items) + ("," if len(items) == 1 else "") + ")"
+
+
+def _lincomb(n1: int, k: int) -> str:
+    """henon_lc<k>(z, h, c0, v0, ...) = z + h (c0 v0 + ...) over the n+1 components."""
+    args = ", ".join(f"c{j}, v{j}" for j in range(k))
+    comps = [f"z[{i}] + h * (" + " + ".join(f"c{j} * v{j}[{i}]" for j in range(k)) + ")"
+             for i in range(n1)]
+    return f"\n@njit(cache=True)\ndef henon_lc{k}(z, h, {args}):\n    return {_tup(comps)}\n"
+
+
+def _run(name: str, rhs: str, n1: int, arities: set) -> str:
+    """``name(z0, d, m, par)``: m equal DOP853 substeps of dz = rhs(z) over d (unrolled)."""
+    A = np.asarray(dop853.A, dtype=float)[:STAGES, :STAGES]
+    B = np.asarray(dop853.B, dtype=float)
+    zero = _tup(["0.0"] * n1)
+    run = [f"\n@njit(cache=True)\ndef {name}(z0, d, m, par):",
+           "    # m equal DOP853 substeps over d, accumulated as the increment dz = z - z0 by",
+           "    # compensated (Kahan) summation: its rounding then neither acts on z nor grows with",
+           "    # m, and results with m and 2m can agree to 1e-15",
+           "    hs = d / m", f"    dz = {zero}", f"    cz = {zero}",
+           "    for _ in range(m):", "        z = henon_lc1(z0, 1.0, 1.0, dz)",
+           f"        k0 = {rhs}(z, par)"]
+    for i in range(1, STAGES):
+        terms = [(A[i, j], j) for j in range(i) if A[i, j] != 0.0]
+        arities.add(len(terms))
+        args = ", ".join(f"{lit(c)}, k{j}" for c, j in terms)
+        run.append(f"        k{i} = {rhs}(henon_lc{len(terms)}(z, hs, {args}), par)")
+    terms = [(B[j], j) for j in range(STAGES) if B[j] != 0.0]
+    arities.add(len(terms))
+    run.append(f"        inc = henon_lc{len(terms)}({zero}, hs, "
+               + ", ".join(f"{lit(c)}, k{j}" for c, j in terms) + ")")
+    run.append("        dz, cz = henon_kahan(dz, cz, inc)")
+    run.append("    return henon_lc1(z0, 1.0, 1.0, dz)")
+    return "\n".join(run) + "\n"
+
+
+def henon_source(n: int, field: str = "f") -> str:
+    """``henon_locate(y, t, t_next, par) -> (y*, t*, m, nfev, walked)`` for an n-dimensional state
+    and section 0 of the problem, integrating the field named ``field`` (the logic is the template
+    methods/kernels/events.py ``henon_locate``; here the unrolled parts)."""
+    n1 = n + 1
+    ys = _tup([f"z[{i}]" for i in range(n)])
+    dot = " + ".join(f"G[{i}] * F[{i}]" for i in range(n))
+    helpers = [
+        "\n@njit(cache=True)\ndef henon_rhs(z, par):",
+        "    # (dy/dg, dt/dg) = (F, 1) / (grad g . F)  (Hénon 1982)",
+        f"    y = {ys}", f"    F = {field}(y, par)", "    G = section_grad_0(y, par)",
+        f"    d = {dot}",
+        "    return " + _tup([f"F[{i}] / d" for i in range(n)] + ["1.0 / d"]),
+        "\n@njit(cache=True)\ndef flow_rhs(z, par):",
+        "    # (dy/dt, dt/dt) = (F, 1): the same flow in time (to walk towards the section)",
+        f"    F = {field}({ys}, par)",
+        "    return " + _tup([f"F[{i}]" for i in range(n)] + ["1.0"]),
+        "\n@njit(cache=True)\ndef henon_slope(y, par):",
+        "    # grad g . F = dg/dt along the flow",
+        f"    F = {field}(y, par)", "    G = section_grad_0(y, par)", f"    return {dot}",
+        "\n@njit(cache=True)\ndef henon_state(z):", f"    return {ys}",
+        "\n@njit(cache=True)\ndef henon_join(y, t):",
+        "    return " + _tup([f"y[{i}]" for i in range(n)] + ["t"])]
+    arities = {1}
+    runs = _run("henon_run", "henon_rhs", n1, arities) + _run("flow_run", "flow_rhs", n1, arities)
+    kahan = ["\n@njit(cache=True)\ndef henon_kahan(s, c, x):",
+             "    # s + x with the running compensation c (Kahan summation)"]
+    for i in range(n1):
+        kahan += [f"    x{i} = x[{i}] - c[{i}]", f"    s{i} = s[{i}] + x{i}",
+                  f"    c{i} = (s{i} - s[{i}]) - x{i}"]
+    kahan.append("    return " + _tup([f"s{i}" for i in range(n1)]) + ", "
+                 + _tup([f"c{i}" for i in range(n1)]))
+    return (f"\nHENON_RTOL = {HENON_RTOL!r}\nHENON_MAX_SUBSTEPS = {HENON_MAX_SUBSTEPS}\n"
+            f"HENON_STAGES = {float(STAGES)!r}\nHENON_WALK_MAX = {HENON_WALK_MAX}\n"
+            + "".join(_lincomb(n1, k) for k in sorted(arities)) + "\n".join(kahan) + "\n"
+            + "\n".join(helpers) + "\n" + runs
+            + template(events.henon_converge) + template(events.henon_locate))
+
+
+def root_functions(n: int, section: bool) -> str:
+    """The value/slope pairs of the dense-output roots: the grid time always, g when the problem
+    has a section; and the two renamed copies of ``dense_root`` that use them."""
+    src = ("\n@njit(cache=True)\ndef time_value(u, par, tc, tk):\n    return u[tc] - tk\n"
+           "\n@njit(cache=True)\ndef time_slope(u, du, par, tc):\n    return du[tc]\n"
+           + template(events.dense_root, {"dense_root": "dense_root_time",
+                                          "ROOT_VALUE": "time_value", "ROOT_SLOPE": "time_slope"}))
+    if section:
+        dot = " + ".join(f"G[{i}] * du[{i}]" for i in range(n))
+        src += ("\n@njit(cache=True)\ndef sec_value(u, par, tc, tk):\n"
+                "    return section_g_0(u, par)\n"
+                "\n@njit(cache=True)\ndef sec_slope(u, du, par, tc):\n"
+                f"    G = section_grad_0(u, par)\n    return {dot}\n"
+                + template(events.dense_root, {"ROOT_VALUE": "sec_value",
+                                               "ROOT_SLOPE": "sec_slope"}))
+    return src
+
+
+def locate_all_source() -> str:
+    """``section_values`` (g at many samples) and ``henon_all`` (Hénon's trick from many samples)
+    in one compiled call each (a problem's own module: the crossings of external engines and
+    transformed problems, scanned after the run)."""
+    return '''
+@njit(cache=True)
+def section_values(Y, par, out):
+    # g at every row of Y (the scan for crossings)
+    for r in range(Y.shape[0]):
+        out[r] = section_g_0(to_tuple(Y[r]), par)
+
+@njit(cache=True)
+def henon_all(T, Y, idx, par, out_t, out_y, out_ok, out_m):
+    # from sample idx[j] (the one before crossing j): located point, direction, substeps
+    for j in range(idx.shape[0]):
+        ys, ts, m, _, _ = henon_locate(to_tuple(Y[idx[j]]), T[idx[j]], T[idx[j] + 1], par)
+        out_t[j] = ts
+        store(ys, out_y, j)
+        out_ok[j] = section_cond_0(ys, par) > 0.0
+        out_m[j] = m
+'''
+
+
+def grid_functions(family: str, partial: str) -> str:
+    """``partial_sample_<family>`` and ``grid_sample_<family>`` (methods/kernels/events.py) bound to
+    the family's partial step ``partial`` (``partial_fixed``, ``partial_adaptive``)."""
+    ps, gs = f"partial_sample_{family}", f"grid_sample_{family}"
+    return (template(events.partial_sample, {"partial_sample": ps, "PARTIAL": partial})
+            + template(events.grid_sample, {"grid_sample": gs, "partial_sample": ps}))
+
+
+def section_functions(n: int) -> str:
+    """What the section drivers call: the crossing test, the writer, Hénon's locator."""
+    return (template(events.crosses) + template(events.section_event)
+            + template(events.henon_crossing) + henon_source(n))
+
+
+FLAGS = ("DENSE_OUTPUT", "GRID", "GRIDDED", "SECTION", "SECTION_DENSE", "WITH_STAGES")
+
+
+def variant(func, name: str, *on: str) -> str:
+    """A driver template generated as ``name`` with the literal flags ``on`` True, the others
+    False (so each copy compiles only its own loop; see methods/kernels/adaptive.py)."""
+    rename = {flag: str(flag in on) for flag in FLAGS}
+    rename[func.__name__] = name
+    return template(func, rename)

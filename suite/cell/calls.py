@@ -1,0 +1,95 @@
+"""Calling a resumable compiled driver: output buffers, work budget, progress and Ctrl-C.
+
+Every compiled driver (methods/kernels/driver.py, adaptive.py, extrapolation.py and their grid and
+section variants) keeps its whole state in ``y_io`` and ``st`` and returns ``STATUS_BUFFER_FULL``
+(its output buffer is full) or ``STATUS_PAUSED`` (the work budget of one call is spent) to be
+called again; :func:`run_driver` does so, with a budget tuned so that one call lasts about
+``CALL_SECONDS`` (progress reports and Ctrl-C are handled between calls, so an interrupt stops any
+integration within a fraction of a second) and a new buffer whenever one is full. Only the time
+spent inside the compiled calls counts as wall time. The results do not depend on the buffer size
+or the budget (tests/test_sections.py, tests/test_time_grid.py).
+"""
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+import numpy as np
+from gnibench.suite.foundation.status import Status
+
+CALL_SECONDS = 0.1          # target duration of one call of a compiled driver
+FIRST_BUDGET = 256          # steps (attempts) in the first call, then scaled to CALL_SECONDS
+UNLIMITED = 1 << 62
+#: counter columns of the output buffer: steps, nfev, njev, rejected, size of the last step
+COUNTERS = 5
+
+Progress = Callable[[float], None]
+
+
+class Buffers:
+    """Output buffers of a compiled driver: the rows written so far, and views with room left."""
+
+    def __init__(self, rows: int, dim: int, grow: bool):
+        self.dim, self.grow, self.chunks = dim, grow, []
+        self._new(max(int(rows), 2))
+
+    def _new(self, rows: int) -> None:
+        self.t, self.y = np.empty(rows), np.empty((rows, self.dim))
+        self.c = np.zeros((rows, COUNTERS))
+        self.row = 0
+        self.chunks.append(self)
+
+    def views(self):
+        r = self.row
+        return self.t[r:], self.y[r:], self.c[r:]
+
+    def advance(self, rows: int) -> None:
+        self.row += rows
+
+    def full(self) -> None:
+        """The driver asked for room (BUFFER_FULL): keep what is written, start a new buffer (twice
+        as large when not even one step's rows fitted into an empty one)."""
+        if not self.grow:
+            raise RuntimeError("compiled driver: output buffer too small (sized for the horizon)")
+        size = len(self.t) if self.row else 2 * len(self.t)
+        kept = Buffers.__new__(Buffers)
+        kept.t, kept.y, kept.c = self.t[:self.row], self.y[:self.row], self.c[:self.row]
+        self.chunks[-1] = kept
+        self._new(size)
+
+    def arrays(self):
+        parts = self.chunks[:-1] + [self]
+        t = np.concatenate([p.t[:p.row] if p is self else p.t for p in parts])
+        y = np.concatenate([p.y[:p.row] if p is self else p.y for p in parts])
+        c = np.concatenate([p.c[:p.row] if p is self else p.c for p in parts])
+        return t, y, c
+
+
+def run_driver(call: Callable, buffers: Buffers, fraction: Callable[[], float],
+               progress: Progress | None, budget: int | None) -> tuple[Status, float]:
+    """Call a resumable driver (``call(budget, out_t, out_y, out_c) -> (code, rows)``) until it
+    returns a final status; return it and the seconds spent inside the calls.
+
+    ``budget``: steps per call; 0 tunes it to ``CALL_SECONDS`` a call, None does the whole
+    horizon in one call (the benchmark loop)."""
+    wall = 0.0
+    b = UNLIMITED if budget is None else (budget or FIRST_BUDGET)
+    while True:
+        try:
+            t0 = time.perf_counter()
+            code, rows = call(b, *buffers.views())
+            dt = time.perf_counter() - t0
+            wall += dt
+            buffers.advance(int(rows))
+        except KeyboardInterrupt:
+            return Status.INTERRUPTED, wall
+        status = Status.from_code(int(code))
+        if status is Status.BUFFER_FULL:
+            buffers.full()
+        elif status is not Status.PAUSED:
+            return status, wall
+        if progress is not None:
+            progress(fraction())
+        if budget == 0 and status is Status.PAUSED:      # tune the next call to CALL_SECONDS
+            scale = CALL_SECONDS / max(dt, 1e-6)
+            b = int(min(max(b * min(scale, 8.0), b / 4.0, 16), UNLIMITED))
