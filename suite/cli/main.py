@@ -1,4 +1,4 @@
-"""The ``gnibench`` command line: solve, list, run, bench.
+"""The ``gnibench`` command line: solve, list, run, reproduce, bench.
 
 Bad input gives one line on stderr and exit code 2 (no traceback, nothing written).
 """
@@ -101,6 +101,12 @@ def _parser() -> argparse.ArgumentParser:
                    help="address of a running Dask scheduler (with --executor dask)")
     r.add_argument("--fresh", action="store_true",
                    help="ignore the cells stored by earlier runs in the output directory")
+    r.add_argument("--scale", default="paper", metavar="paper|quick",
+                   help="the experiment's paper scale (default) or its shortened quick scale")
+
+    from gnibench.suite.cli.reproduce import add_parser
+
+    add_parser(sub, _path)
 
     b = sub.add_parser("bench", help="time kernels in ns/step against a C loop")
     b.add_argument("--steps", type=int, default=2_000_000)
@@ -164,7 +170,8 @@ def _run(a) -> int:
     from gnibench.suite.runs.runner import run_experiment
 
     run_experiment(a.experiment, a.output, jobs=a.jobs, executor=a.executor,
-                   scheduler=a.scheduler, fresh=a.fresh, summarize=render_summary)
+                   scheduler=a.scheduler, fresh=a.fresh, summarize=render_summary,
+                   scale=a.scale)
     return 0
 
 
@@ -178,7 +185,11 @@ def _bench(a) -> int:
 def main(argv=None) -> int:
     try:
         a = _parser().parse_args(argv)
-        return {"solve": _solve, "list": _list, "run": _run, "bench": _bench}[a.command](a)
+        from gnibench.suite.cli.reproduce import run as _reproduce
+
+        commands = {"solve": _solve, "list": _list, "run": _run, "reproduce": _reproduce,
+                    "bench": _bench}
+        return commands[a.command](a)
     except UserError as e:
         print(f"gnibench: error: {e}", file=sys.stderr)
         return 2
