@@ -104,11 +104,36 @@ def values(df: pd.DataFrame, column: str, log: bool) -> np.ndarray:
     return v
 
 
-def thin(x: np.ndarray, y: np.ndarray, limit: int = MAX_DRAWN) -> tuple[np.ndarray, np.ndarray]:
-    """At most ``limit`` points, evenly taken, the last one kept."""
-    if len(x) <= limit:
+def thin(x: np.ndarray, y: np.ndarray, limit: int = MAX_DRAWN,
+         logx: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """At most about ``limit`` points of a line: the samples are cut into ``limit / 2`` buckets
+    and the smallest and largest y of each are kept, in order (the band of a fast oscillation
+    keeps its edges; even thinning would alias it). A curve whose x increases (a time series) is
+    cut into buckets of equal width in x as drawn (in log x on a log axis), others into buckets of
+    equal numbers of samples. First and last points kept."""
+    n = len(x)
+    if n <= limit:
         return x, y
-    idx = np.unique(np.append(np.linspace(0, len(x) - 1, limit).round().astype(int), len(x) - 1))
+    nb = limit // 2
+    pos = np.log(np.where(x > 0, x, np.nan)) if logx else x.astype(float)
+    ok = np.isfinite(pos)
+    if ok.sum() > 1 and np.all(np.diff(pos[ok]) >= 0):
+        edges = np.linspace(pos[ok][0], pos[ok][-1], nb + 1)
+        bucket = np.where(ok, np.clip(np.searchsorted(edges, pos, side="right") - 1, 0, nb - 1),
+                          -1)
+        starts = np.flatnonzero(np.diff(np.concatenate([[-2], bucket])) != 0)
+        buckets = np.split(np.arange(n), starts[1:])
+    else:
+        buckets = np.array_split(np.arange(n), nb)
+    keep = [0, n - 1]
+    finite = np.where(np.isfinite(y), y, np.nan)
+    for b in buckets:
+        part = finite[b]
+        if np.all(np.isnan(part)):
+            keep.append(int(b[0]))
+            continue
+        keep += [int(b[np.nanargmin(part)]), int(b[np.nanargmax(part)])]
+    idx = np.unique(keep)
     return x[idx], y[idx]
 
 

@@ -118,15 +118,18 @@ def _draw_curve(ax, results, curve: dict, logx: bool, logy: bool) -> dict:
         out["samples"] += len(df)
         ok = np.isfinite(x) & np.isfinite(y)
         out["points"] += int(ok.sum())
-        x, y = thin(x, y)
+        x, y = thin(x, y, logx=logx)
         if curve.get("xwrap") or curve.get("ywrap"):
             x, y = wrap(x, y, curve.get("xwrap"), curve.get("ywrap"))
+        style = {"linewidth": curve.get("linewidth", 1.2), **style}
         ax.plot(x, y, color=color, label=label if first and label else None, **style)
         first = False
         if curve.get("start") and ok.any():
             i = int(np.argmax(ok))
-            ax.annotate(curve["start"], (x[i], y[i]), xytext=(3, 3), textcoords="offset points",
-                        fontsize=8, color=color)
+            ax.annotate(curve["start"], (x[i], y[i]), xytext=(4, 4), textcoords="offset points",
+                        fontsize=8.5, fontweight="bold", color="black",
+                        bbox={"boxstyle": "round,pad=0.15", "facecolor": "white", "alpha": 0.75,
+                              "edgecolor": "none"})
     return out
 
 

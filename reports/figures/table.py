@@ -10,6 +10,7 @@ as ``t^a h^b``. When every cell's max |err| is below the figure's ``zero_below``
 from __future__ import annotations
 
 import math
+import textwrap
 
 import numpy as np
 
@@ -77,7 +78,9 @@ def draw_table(results, figure: dict):
 
     data = table_data(results, figure)
     ncols = len(data["columns"])
-    width = figure.get("size") or [3.0 + 3.4 * ncols, 1.6 + 0.55 * len(data["rows"])]
+    labels = ["\n".join(textwrap.wrap(row["label"], 30)) for row in data["rows"]]
+    units = 2 + 0.4 + sum(1 + 0.8 * lab.count("\n") + 0.4 for lab in labels)
+    width = figure.get("size") or [3.2 + 3.0 * ncols, 0.9 + 0.3 * units]
     fig = plt.figure(figsize=tuple(width), layout="constrained")
     fig.suptitle(title_text(figure, width[0]), fontsize=10.5)
     ax = fig.add_subplot(1, 1, 1)
@@ -86,20 +89,23 @@ def draw_table(results, figure: dict):
     for col in data["columns"]:
         header += [f"{col['label']}\n[HLW]", f"{col['label']}\nmeasured"]
     body = []
-    for row in data["rows"]:
-        line = [row["label"]]
+    for label, row in zip(labels, data["rows"]):
+        line = [label]
         for book, entry in zip(row["book"], row["measured"]):
             line += [book_math(book), entry_text(entry, math_text=True)]
         body.append(line)
-    tab = ax.table(cellText=body, colLabels=header, loc="center", cellLoc="center")
+    first = 3.2 / width[0]
+    widths = [first] + [(1 - first) / (2 * ncols)] * (2 * ncols)
+    tab = ax.table(cellText=body, colLabels=header, cellLoc="center", colWidths=widths,
+                   bbox=[0, 0, 1, 1])
     tab.auto_set_font_size(False)
     tab.set_fontsize(9.5)
-    tab.scale(1.0, 1.9)
     for (r, c), cell in tab.get_celld().items():
+        text_lines = 2 if r == 0 else max(1, labels[r - 1].count("\n") + 1)
+        cell.set_height((1 + 0.8 * (text_lines - 1) + 0.4) / units)
         if r == 0:
             cell.set_text_props(fontweight="bold")
             cell.set_facecolor("#EEEEEE")
-            cell.set_height(cell.get_height() * 1.35)
         elif c == 0:
             key = method_key(figure["table"]["rows"][r - 1]["method"])
             cell.set_text_props(color=color_of(key), fontweight="bold")

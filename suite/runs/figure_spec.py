@@ -35,6 +35,7 @@ the drawing (:mod:`gnibench.reports.figures`) reads only the results directory. 
     color = "exact"                # a palette key (default: the cell's method)
     start = "J"                    # text at the first point of the curve
     xwrap = [-3.14159, 3.14159]    # x taken modulo the interval (an angle on the circle)
+    linewidth = 0.5                # points (default 1.2)
 
     [[figure.panels.fields]]       # a function of the problem record on a grid (no integration)
     problem = "henon-heiles"       # PROBLEM spec
@@ -66,7 +67,8 @@ from gnibench.suite.runs.figure_fields import parse_field
 FIGURE_KEYS = ("number", "caption", "kind", "layout", "size", "note", "panels", "table")
 PANEL_KEYS = ("title", "x", "y", "xlabel", "ylabel", "xscale", "yscale", "xlim", "ylim", "aspect",
               "legend", "zoom", "note", "curves", "fields")
-CURVE_KEYS = ("cells", "label", "x", "y", "style", "at", "color", "start", "xwrap", "ywrap")
+CURVE_KEYS = ("cells", "label", "x", "y", "style", "at", "color", "start", "xwrap", "ywrap",
+              "linewidth")
 SELECT_KEYS = ("group", "index", "cell")
 TABLE_KEYS = ("columns", "rows", "zero_below")
 ROW_KEYS = ("label", "cells", "book")
@@ -241,7 +243,10 @@ def _curve(curve, cells, x: str, y: str, where: str) -> dict:
            "x": _line(curve, "x", where, default=x), "y": _line(curve, "y", where, default=y),
            "style": _choice(curve, "style", STYLES, "line", where), "at": None,
            "color": _line(curve, "color", where), "start": _line(curve, "start", where),
-           "xwrap": _pair(curve, "xwrap", where, None), "ywrap": _pair(curve, "ywrap", where, None)}
+           "xwrap": _pair(curve, "xwrap", where, None), "ywrap": _pair(curve, "ywrap", where, None),
+           "linewidth": _number(curve.get("linewidth", 1.2), f"{where}: linewidth")}
+    if not 0 < out["linewidth"] <= 10:
+        raise UserError(f"{where}: bad linewidth = {out['linewidth']}; allowed: 0 < width <= 10")
     if not out["y"]:
         raise UserError(f"{where}: no y column (give y in the curve or its panel)")
     chosen = [cells[i] for i in ids]
