@@ -95,18 +95,20 @@ def render_summary(meta: dict, cells, timings) -> str:
     lines += [f"{total} cells ({status_text}); {state}.", ""]
     wall = dict(zip(timings["cell"], timings["wall_seconds"])) if len(timings) else {}
     comp = dict(zip(timings["cell"], timings["compile_seconds"])) if len(timings) else {}
-    for problem in pd.unique(cells["problem"]):
-        part = cells[cells["problem"] == problem]
-        errs = [c for c in part.columns if c.startswith("max_abs_err_") and part[c].notna().any()]
-        has_exact = part["final_global_error"].notna().any()
+    by_problem: dict[str, list[dict]] = {}
+    for record in cells.to_dict("records"):      # one pass: an experiment may have many problems
+        by_problem.setdefault(record["problem"], []).append(record)
+    err_columns = [c for c in cells.columns if c.startswith("max_abs_err_")]
+    for problem, records in by_problem.items():
+        errs = [c for c in err_columns if any(pd.notna(d[c]) for d in records)]
+        has_exact = any(pd.notna(d["final_global_error"]) for d in records)
         header = ["cell", "method", "status", "t", "steps", "nfev"]
         header += [f"max \\|err {c[len('max_abs_err_'):]}\\|" for c in errs]
         if has_exact:
             header += ["final global error", "max global error"]
         header += ["run ms", "compile s"]
         rows = []
-        for r in part.itertuples(index=False):
-            d = r._asdict()
+        for d in records:
             row = [d["cell"], code(d["method"]), escape(d["status"]), _num(d["t_final"], ".4g"),
                    _num(d["steps"]), _count(d["nfev"])]
             row += [_num(d[c]) for c in errs]
@@ -116,8 +118,8 @@ def render_summary(meta: dict, cells, timings) -> str:
             row += [_num(ms, ".3g"), _num(comp.get(d["cell"]), ".2f")]
             rows.append(row)
         lines += [f"## {code(problem)}", ""] + _table(header, rows) + [""]
-        notes = [f"- cell {r.cell} ({escape(r.status)}): {escape(r.reason)}" for r in part.itertuples()
-                 if r.status not in ("ok", "pending") and r.reason]
+        notes = [f"- cell {d['cell']} ({escape(d['status'])}): {escape(d['reason'])}"
+                 for d in records if d["status"] not in ("ok", "pending") and d["reason"]]
         if notes:
             lines += notes + [""]
     lines += [("Tables: `samples.parquet` (one row per cell and sample), `cells.parquet` (one row "

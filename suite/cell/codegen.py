@@ -171,8 +171,25 @@ def load_problem(problem):
     return _import(text, "problem"), meta
 
 
+#: module file -> numba cache misses of its functions when this process last recorded it
+_recorded: dict[str, int] = {}
+
+
+def _misses(kernel) -> int:
+    return sum(sum(f.stats.cache_misses.values()) for f in vars(kernel).values()
+               if hasattr(f, "stats") and hasattr(f.stats, "cache_misses"))
+
+
 def record_compiled(*kernels) -> None:
     """Record the checksums of the numba cache files of generated modules (after they compiled or
-    loaded what a cell runs; see :func:`gnibench.suite.foundation.cache.record_numba_files`)."""
+    loaded what a cell runs; see :func:`gnibench.suite.foundation.cache.record_numba_files`).
+
+    numba writes cache files only when it compiles (a cache miss), so a module recorded before
+    in this process with no miss since is skipped: listing the shared ``__pycache__`` costs more
+    than a small cell."""
     for kernel in kernels:
+        misses = _misses(kernel)
+        if _recorded.get(kernel.__file__) == misses:
+            continue
         record_numba_files(Path(kernel.__file__))
+        _recorded[kernel.__file__] = misses

@@ -1,4 +1,4 @@
-"""The ``gnibench`` command line: solve, list, run, bench.
+"""The ``gnibench`` command line: solve, list, run, reproduce, bench.
 
 Bad input gives one line on stderr and exit code 2 (no traceback, nothing written).
 """
@@ -106,6 +106,12 @@ def _parser() -> argparse.ArgumentParser:
                    help="address of a running Dask scheduler (with --executor dask)")
     r.add_argument("--fresh", action="store_true",
                    help="ignore the cells stored by earlier runs in the output directory")
+    r.add_argument("--scale", default="paper", metavar="paper|quick",
+                   help="the experiment's paper scale (default) or its shortened quick scale")
+
+    from gnibench.suite.cli.reproduce import add_parser
+
+    add_parser(sub, _path)
 
     v = sub.add_parser("verify", help="check the claims of [B] and [HLW] against our measurements")
     v.add_argument("claims", nargs="*", metavar="ID", help="claim ids (default: all)")
@@ -185,7 +191,8 @@ def _run(a) -> int:
     from gnibench.suite.runs.runner import run_experiment
 
     run_experiment(a.experiment, a.output, jobs=a.jobs, executor=a.executor,
-                   scheduler=a.scheduler, fresh=a.fresh, summarize=render_summary)
+                   scheduler=a.scheduler, fresh=a.fresh, summarize=render_summary,
+                   scale=a.scale)
     return 0
 
 
@@ -199,7 +206,10 @@ def _bench(a) -> int:
 def main(argv=None) -> int:
     try:
         a = _parser().parse_args(argv)
-        commands = {"solve": _solve, "list": _list, "run": _run, "bench": _bench}
+        from gnibench.suite.cli.reproduce import run as _reproduce
+
+        commands = {"solve": _solve, "list": _list, "run": _run, "reproduce": _reproduce,
+                    "bench": _bench}
         if a.command == "verify":
             from gnibench.suite.cli.verify import verify_command
 

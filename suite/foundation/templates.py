@@ -9,6 +9,7 @@ module lives above, in :mod:`gnibench.suite.cell.codegen`.
 """
 from __future__ import annotations
 
+import functools
 import inspect
 import re
 import textwrap
@@ -32,10 +33,16 @@ class Context:
 
 def template(func, rename: dict[str, str] | None = None) -> str:
     """Source of a template function, decorated for numba, with identifiers renamed."""
-    src = textwrap.dedent(inspect.getsource(func))
+    src = _source(func)
     for old, new in (rename or {}).items():
         src = re.sub(rf"\b{re.escape(old)}\b", new, src)
     return "\n@njit(cache=True)\n" + src
+
+
+@functools.cache
+def _source(func) -> str:
+    """The dedented source of a function (read once per process: inspect tokenizes the file)."""
+    return textwrap.dedent(inspect.getsource(func))
 
 
 def tuple_helpers(n: int) -> str:

@@ -50,8 +50,9 @@ from gnibench.suite.foundation.errors import UserError, unknown
 from gnibench.suite.foundation.params import format_float
 
 TOP_KEYS = ("name", "title", "reference", "description", "t_end", "steps", "every", "dt_out",
-            "metrics", "cells")
-GROUP_KEYS = ("label", "problems", "methods", "t_end", "steps", "every", "dt_out", "metrics", "vary")
+            "metrics", "cells", "scale", "figure")
+GROUP_KEYS = ("label", "problems", "methods", "t_end", "steps", "every", "dt_out", "metrics", "vary",
+              "points", "scale")
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]*$")
 
 
@@ -92,6 +93,9 @@ class Experiment:
     source: str
     text: str
     cells: tuple[Cell, ...]
+    scale: str = "paper"
+    figure: dict | None = None
+    scales: tuple[str, ...] = ("paper",)
 
 
 def shipped() -> dict[str, str]:
@@ -101,8 +105,9 @@ def shipped() -> dict[str, str]:
             if f.name.endswith(".toml")}
 
 
-def load_experiment(name_or_path: str | Path) -> Experiment:
-    """Read, validate and expand an experiment given by path or shipped name."""
+def load_experiment(name_or_path: str | Path, scale: str = "paper") -> Experiment:
+    """Read, validate and expand an experiment given by path or shipped name, at a scale
+    (``paper`` or ``quick``, :mod:`gnibench.suite.runs.scales`)."""
     arg = str(name_or_path)
     path = Path(arg)
     if path.suffix == ".toml" or "/" in arg or path.is_file():
@@ -120,16 +125,23 @@ def load_experiment(name_or_path: str | Path) -> Experiment:
         if arg not in known:
             raise unknown("experiment", arg, known)
         text, source = known[arg], f"{arg}.toml"
-    return parse_experiment(text, source)
+    return parse_experiment(text, source, scale)
 
 
-def parse_experiment(text: str, source: str) -> Experiment:
-    """Validate an experiment's TOML text and expand its cells (``source`` names it in errors)."""
+def parse_experiment(text: str, source: str, scale: str = "paper") -> Experiment:
+    """Validate an experiment's TOML text at a scale and expand its cells (``source`` names it
+    in errors); a ``[figure]`` section is validated against the cells
+    (:mod:`gnibench.suite.runs.figure_spec`)."""
+    from gnibench.suite.runs.scales import at_scale, check_scale, scales_stated
+
+    check_scale(scale)
     try:
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         raise UserError(f"{source}: not valid TOML: {e}") from None
     _keys(doc, TOP_KEYS, source)
+    stated = scales_stated(doc)
+    doc = at_scale(doc, scale, source)
     name = _text(doc, "name", source, required=True)
     if not _NAME.match(name):
         raise UserError(f"{source}: bad name {name!r}; allowed: letters, digits and . _ - "
@@ -137,8 +149,9 @@ def parse_experiment(text: str, source: str) -> Experiment:
     title = _text(doc, "title", source, required=True, one_line=True)
     reference = _text(doc, "reference", source, required=True, one_line=True)
     description = _text(doc, "description", source)
-    groups = doc.get("cells")
-    if not isinstance(groups, list) or not groups or not all(isinstance(g, dict) for g in groups):
+    groups = doc.get("cells", [] if "figure" in doc else None)
+    if not isinstance(groups, list) or not all(isinstance(g, dict) for g in groups) or (
+            not groups and "figure" not in doc):
         raise UserError(f"{source}: needs at least one [[cells]] group")
     defaults = {k: doc[k] for k in ("t_end", "steps", "every", "dt_out") if k in doc}
     planned = sum(_planned_cells(g, f"{source}: cells[{gi}]") for gi, g in enumerate(groups))
@@ -154,7 +167,14 @@ def parse_experiment(text: str, source: str) -> Experiment:
             raise UserError(f"{source}: cell {c.id} ({c.problem} {c.method}) duplicates cell "
                             f"{seen[key]}; allowed: each cell once")
         seen[key] = c.id
-    return Experiment(name, title, reference, description, source, text, tuple(cells))
+    figure = None
+    if "figure" in doc:
+        from gnibench.suite.runs.figure_spec import parse_figure
+
+        figure = parse_figure(doc["figure"], cells, name=name, reference=reference,
+                              scale=scale, where=f"{source}: figure")
+    return Experiment(name, title, reference, description, source, text, tuple(cells), scale,
+                      figure, stated)
 
 
 def _keys(table: dict, allowed: tuple[str, ...], where: str) -> None:
@@ -227,7 +247,9 @@ def _planned_cells(group, where: str) -> int:
     """The number of cells a group expands to, counted before expanding it."""
     if not isinstance(group, dict):
         return 0
-    n = 1
+    from gnibench.suite.runs.scales import planned_points
+
+    n = planned_points(group.get("points"))
     for key in ("problems", "methods"):
         value = group.get(key)
         n *= len(value) if isinstance(value, list) else 1
@@ -333,6 +355,12 @@ def _expand(group: dict, gi: int, defaults: dict, where: str, first_id: int) -> 
     metrics = (defaults.get("metrics") or ()) if metrics is None else metrics
     dt_out = _dt_out(group, defaults, where)
     problem_vary, method_vary = _vary(group, where)
+    points = [{}]
+    if "points" in group:
+        from gnibench.suite.runs.scales import point_options
+
+        points = [{k: format_float(v) for k, v in p.items()}
+                  for p in point_options(group["points"], where)]
     for target, opt, _ in method_vary:
         modifiers = {part.partition(":")[0].strip() for m in methods for part in split_method(m)[1:]}
         if target != "method" and target not in modifiers:
@@ -340,11 +368,13 @@ def _expand(group: dict, gi: int, defaults: dict, where: str, first_id: int) -> 
                             f"modifier {target!r}")
     cells = []
     parsed_problems = []
-    for pgiven, *pvals in itertools.product(problems, *[v[2] for v in problem_vary]):
+    for pgiven, point, *pvals in itertools.product(problems, points,
+                                                   *[v[2] for v in problem_vary]):
         for mgiven, *mvals in itertools.product(methods, *[v[2] for v in method_vary]):
             here = f"{where}: {pgiven} {mgiven}"
             try:
-                pspec = _apply(pgiven, problem_vary, pvals)
+                pspec = with_options(pgiven, "problem", point) if point else pgiven
+                pspec = _apply(pspec, problem_vary, pvals)
                 mspec = _apply(mgiven, method_vary, mvals)
                 here = f"{where}: {pspec} {mspec}"
                 problem, method = prepare(pspec, mspec)

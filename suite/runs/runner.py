@@ -51,7 +51,7 @@ FLUSH_RATIO = 10.0
 
 def run_experiment(name_or_path, out_dir=None, *, jobs: int | None = None,
                    executor: str = "local", scheduler: str | None = None, fresh: bool = False,
-                   log=None, summarize=None) -> Path:
+                   log=None, summarize=None, scale: str = "paper") -> Path:
     """Run an experiment (shipped name or TOML path); return the output directory.
 
     Parameters
@@ -72,8 +72,10 @@ def run_experiment(name_or_path, out_dir=None, *, jobs: int | None = None,
     summarize:
         ``summarize(meta, cells, timings) -> str``: the Markdown written to ``summary.md`` with
         every consolidation (None: no summary).
+    scale:
+        ``paper`` (the file's values) or ``quick`` (its ``[scale.quick]`` overrides).
     """
-    experiment = load_experiment(name_or_path)
+    experiment = load_experiment(name_or_path, scale)
     executors.check(executor, jobs, scheduler)
     out = Path(out_dir) if out_dir is not None else Path("results") / experiment.name
     run_experiments([experiment], [out], out, jobs=jobs, executor=executor, scheduler=scheduler,
@@ -153,6 +155,8 @@ class Consolidator:
         self.state_names = experiment_states(experiment)
         self.empty_samples = samples_table([])
         self.last_write, self.write_cost = time.perf_counter(), 0.0
+        figure = experiment.figure or {}
+        self.fields_due = any(p.get("fields") for p in figure.get("panels", []))
 
     def due(self) -> bool:
         return time.perf_counter() - self.last_write >= FLUSH_RATIO * self.write_cost
@@ -182,6 +186,12 @@ class Consolidator:
         # metrics across cells (families equal but for h): a function of the two tables only
         cells_df = family_columns(cells_table(rows), samples)
         timings_df = timings_table(timings)
+        if self.fields_due:           # a figure's functions on a grid: computed once, no cells
+            from gnibench.suite.runs.figure_fields import field_table
+
+            write_parquet(field_table(self.experiment.figure), out / "fields.parquet",
+                          {**meta, "table": "fields"})
+            self.fields_due = False
         write_parquet(samples, out / "samples.parquet", {**meta, "table": "samples"})
         write_parquet(cells_df, out / "cells.parquet", {**meta, "table": "cells"})
         write_parquet(timings_df, out / "timings.parquet",
@@ -223,6 +233,7 @@ def provenance(e: Experiment, ndone: int) -> dict:
     """The metadata of the consolidated tables: nothing that depends on the run itself."""
     return {"experiment": e.name, "title": e.title, "reference": e.reference,
             "description": e.description, "source": e.source, "experiment_toml": e.text,
+            "scale": e.scale, "figure": e.figure,
             "versions": versions(), "complete": ndone == len(e.cells), "cells_done": ndone,
             "cells_total": len(e.cells),
             "cells": [{"cell": c.id, "problem": c.problem, "method": c.method,

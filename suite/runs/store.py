@@ -90,6 +90,7 @@ class Store:
         self.out = Path(out)
         self.parts = self.out / "parts"
         self._lock_file = None
+        self._memo: dict[str, Part] = {}      # parts this run has read (each read once)
 
     # -- the lock ---------------------------------------------------------------------------------
 
@@ -175,11 +176,20 @@ class Store:
         write_parquet(samples, self.path(key), meta)
 
     def read(self, key: str) -> Part | None:
-        """A stored part, or None when it is missing or cannot be read (then it is discarded)."""
+        """A stored part, or None when it is missing or cannot be read (then it is discarded).
+
+        A part read before by this run is returned from memory, as a copy (its rows are
+        re-stamped with each experiment's cell ids): a run over several experiments, or one that
+        consolidates its tables many times, reads each part from the disk once (and the tables
+        are built from what the disk holds, whether the part was computed now or before)."""
         import pandas as pd
         from gnibench.suite.runs.storage import read_parquet_meta
 
         path = self.path(key)
+        if key in self._memo and path.is_file():
+            p = self._memo[key]
+            return Part(None if p.samples is None else p.samples.copy(deep=False), dict(p.row),
+                        dict(p.timing), p.state_names)
         if not path.is_file():
             return None
         try:
@@ -190,8 +200,11 @@ class Store:
         except Exception:  # noqa: BLE001 - a damaged part is recomputed, whatever the damage
             path.unlink(missing_ok=True)
             return None
-        return Part(samples, _restore(meta["row"]), _restore(meta["timing"]),
+        part = Part(samples, _restore(meta["row"]), _restore(meta["timing"]),
                     tuple(meta["state_names"]))
+        self._memo[key] = part
+        return Part(None if samples is None else samples.copy(deep=False), dict(part.row),
+                    dict(part.timing), part.state_names)
 
 
 def _restore(d: dict) -> dict:

@@ -140,6 +140,8 @@ _CELL_COLUMNS = ("cell", "group", "label", "problem", "method", "h", "t_end", "s
 def cells_table(rows: list[dict]) -> pd.DataFrame:
     """One row per cell: the fixed columns, max_abs_err_<I>, the global errors, then the other
     per-cell metric values."""
+    if not rows:                         # a figure of fields only has no cells
+        return pd.DataFrame({c: pd.Series(dtype="object") for c in _CELL_COLUMNS})
     df = pd.DataFrame(sorted(rows, key=lambda r: r["cell"]))
     for col in ("steps", "samples"):
         df[col] = df[col].astype("Int64")
@@ -150,6 +152,8 @@ def cells_table(rows: list[dict]) -> pd.DataFrame:
 
 
 def timings_table(rows: list[dict]) -> pd.DataFrame:
-    df = pd.DataFrame(sorted(rows, key=lambda r: r["cell"]))
+    columns = ("cell", "problem", "method", "status", "wall_seconds", "compile_seconds",
+               "cache_misses")
+    df = pd.DataFrame(sorted(rows, key=lambda r: r["cell"]), columns=list(columns))
     df["cache_misses"] = df["cache_misses"].astype("Int64")
     return df

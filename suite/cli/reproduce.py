@@ -1,0 +1,102 @@
+"""``gnibench reproduce ID... | all``: run the seeds' figures and draw them.
+
+Composes :mod:`gnibench.suite.runs.reproduce` (validate every figure, run all their cells over one
+store in DIR, each figure's tables into ``DIR/<id>/``) and :mod:`gnibench.reports.figures` (the
+images and ``figure.json`` into ``DIR/<id>/figure/``). ``--redraw`` draws from the tables already
+in DIR without integrating (with the figure section of the file as it is now, provided its cells
+are still those of the tables); ``--list`` prints the figures, their scales and their cost.
+"""
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from gnibench.suite.foundation.errors import UserError
+
+
+def add_parser(sub, path_type) -> None:
+    r = sub.add_parser("reproduce", help="run and draw figures and tables of the seeds")
+    r.add_argument("ids", nargs="*", metavar="ID",
+                   help="figure ids (gnibench reproduce --list), or all")
+    r.add_argument("--scale", default="paper", metavar="paper|quick",
+                   help="paper: the seed's horizons and step sizes (default); quick: shortened")
+    r.add_argument("-o", "--output", type=path_type, default=None, metavar="DIR",
+                   help="results directory (default: results/reproduce)")
+    r.add_argument("-j", "--jobs", type=int, default=None, metavar="N",
+                   help="worker processes (default: the number of cores; 1: in this process)")
+    r.add_argument("--executor", default="local", metavar="local|dask",
+                   help="local: a process pool (default); dask: a Dask cluster")
+    r.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler (dask)")
+    r.add_argument("--fresh", action="store_true", help="ignore the cells stored in DIR")
+    r.add_argument("--redraw", action="store_true",
+                   help="draw again from the tables in DIR, without integrating")
+    r.add_argument("--list", action="store_true",
+                   help="list the figures, their scales and cost (cells and steps per scale)")
+
+
+def run(a) -> int:
+    from gnibench.suite.runs import reproduce as rep
+    from gnibench.suite.runs.scales import check_scale
+
+    check_scale(a.scale)
+    if a.list:
+        if a.ids or a.redraw:
+            raise UserError("--list takes no ids and no --redraw")
+        print(list_text(rep.listing()))
+        return 0
+    out = a.output if a.output is not None else rep.DEFAULT_DIR
+    if a.redraw:
+        ids = rep.choose(a.ids)
+        for option in ("jobs", "scheduler"):
+            if getattr(a, option) is not None:
+                raise UserError(f"--{option} does not apply with --redraw (nothing is run)")
+        if a.fresh:
+            raise UserError("--fresh does not apply with --redraw (nothing is run)")
+        missing = [fid for fid in ids if not (out / fid / "cells.parquet").is_file()]
+        if missing:
+            raise UserError(f"no results for {', '.join(missing)} in {out}; run gnibench "
+                            f"reproduce {' '.join(missing)} first (without --redraw)")
+        dirs = [out / fid for fid in ids]
+        figures = [rep.current_figure(fid, d) for fid, d in zip(ids, dirs)]
+    else:
+        from gnibench.reports.markdown import render_summary
+
+        experiments = rep.load_figures(a.ids, a.scale)
+        dirs = rep.run_figures(experiments, out, jobs=a.jobs, executor=a.executor,
+                               scheduler=a.scheduler, fresh=a.fresh, summarize=render_summary)
+        figures = [e.figure for e in experiments]
+    draw_all(dirs, figures)
+    return 0
+
+
+def draw_all(dirs: list[Path], figures: list[dict] | None = None, log=None) -> list[dict]:
+    """Draw the figure of each results directory (``figures``: the figure to draw from each, by
+    default the one stored with its tables); one line per figure on ``log``."""
+    from gnibench.reports.figures import FigureDataError, draw_figure
+
+    log = sys.stderr if log is None else log
+    figures = figures or [None] * len(dirs)
+    manifests = []
+    for d, figure in zip(dirs, figures):
+        try:
+            manifest = draw_figure(d, figure=figure)
+        except FigureDataError as e:
+            raise UserError(str(e)) from None
+        manifests.append(manifest)
+        empty = [c["label"] for p in manifest["panels"] for c in p["curves"] if not c["points"]]
+        warn = f"; NO DATA for: {', '.join(empty)}" if empty else ""
+        print(f"gnibench: {manifest['number']} ({manifest['id']}, {manifest['scale']} scale) -> "
+              f"{d / 'figure' / manifest['files'][0]}{warn}", file=log, flush=True)
+    return manifests
+
+
+def list_text(rows: list[dict]) -> str:
+    """The figure listing as aligned text: id, number, title; cost per scale."""
+    lines = []
+    for row in rows:
+        lines.append(f"{row['id']:<16} {row['number']:<10} {row['title']}  ({row['reference']})")
+        for scale, c in row["scales"].items():
+            stated = "" if c["stated"] else " (same as paper)"
+            lines.append(f"{'':16} {scale:<6} {c['cells']:>6} cells {c['steps']:>13,} steps "
+                         f"{c['samples']:>11,} samples{stated}")
+    return "\n".join(lines)
