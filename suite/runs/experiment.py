@@ -10,6 +10,8 @@ An experiment is a TOML file, given by path or by the name of one shipped in
     t_end = 10.0                     # default horizon of every group: t_end OR steps
     every = 1                        # default sampling: a sample every K steps (plus the last)
     metrics = ["growth:of=H"]        # optional: metrics beside the defaults (gnibench list metrics)
+    reference_solution = "heyoka:precision=long double"   # optional: what global_error is
+                                     # measured against (exact | heyoka[:...] | rebound[:...] | none)
 
     [[cells]]                        # a group; the cells are problems x methods x vary values
     label    = "symplectic Euler"    # optional, shown in the summary
@@ -18,6 +20,7 @@ An experiment is a TOML file, given by path or by the name of one shipped in
     steps = 100                      # optional: replaces the top-level horizon for this group
     every = 1                        # optional
     metrics = ["precession"]         # optional: replaces the top-level metrics for this group
+    reference_solution = "exact"     # optional: replaces the top-level reference for this group
     vary.h = [0.3, 0.15]             # a base-method option, one cell per value
     vary.problem.p0 = [0.7, 1.4]     # a problem option
     vary.observer.theta = [1, 15]    # an option of a modifier (only methods that have it)
@@ -48,8 +51,9 @@ from gnibench.suite.foundation.errors import UserError, unknown
 from gnibench.suite.foundation.params import format_float
 
 TOP_KEYS = ("name", "title", "reference", "description", "t_end", "steps", "every", "metrics",
-            "cells")
-GROUP_KEYS = ("label", "problems", "methods", "t_end", "steps", "every", "metrics", "vary")
+            "reference_solution", "cells")
+GROUP_KEYS = ("label", "problems", "methods", "t_end", "steps", "every", "metrics",
+              "reference_solution", "vary")
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]*$")
 
 
@@ -59,7 +63,10 @@ class Cell:
 
     ``problem_spec``/``method_spec`` are the texts given to :func:`gnibench.suite.cell.solve.solve`;
     ``problem``/``method`` are their canonical texts (what the tables show); ``metrics`` the
-    canonical texts of the chosen metrics (beside the default ones).
+    canonical texts of the chosen metrics (beside the default ones); ``reference`` the canonical
+    text of the chosen reference solution (:func:`gnibench.suite.cell.reference.parse_reference`:
+    ``exact``, ``heyoka:precision=...,tol=...``, ``rebound:tol=...`` or ``none``), None for the
+    default (the exact solution where the problem has one).
     """
 
     id: int
@@ -76,6 +83,7 @@ class Cell:
     nsteps: int
     t_final: float
     metrics: tuple[str, ...] = ()
+    reference: str | None = None
 
 
 @dataclass(frozen=True)
@@ -141,12 +149,13 @@ def parse_experiment(text: str, source: str) -> Experiment:
     planned = sum(_planned_cells(g, f"{source}: cells[{gi}]") for gi, g in enumerate(groups))
     check_count(planned, f"{source}", "GNIBENCH_MAX_CELLS", "cells")
     defaults["metrics"] = _metrics(doc, source)
+    defaults["reference_solution"] = _reference_text(doc, source)
     cells: list[Cell] = []
     for gi, group in enumerate(groups):
         cells.extend(_expand(group, gi, defaults, f"{source}: cells[{gi}]", len(cells)))
     seen: dict[tuple, int] = {}
     for c in cells:
-        key = (c.problem, c.method, c.steps, c.t_end, c.every)
+        key = (c.problem, c.method, c.steps, c.t_end, c.every, c.reference)
         if key in seen:
             raise UserError(f"{source}: cell {c.id} ({c.problem} {c.method}) duplicates cell "
                             f"{seen[key]}; allowed: each cell once")
@@ -258,6 +267,27 @@ def _metrics(table: dict, where: str) -> tuple[str, ...] | None:
         raise UserError(f"{where}: metrics: {e}") from None
 
 
+def _reference_text(table: dict, where: str) -> str | None:
+    """The ``reference_solution`` string of a table (None when absent); each cell checks it."""
+    if "reference_solution" not in table:
+        return None
+    value = table["reference_solution"]
+    if not isinstance(value, str) or not value.strip() or any(not c.isprintable() for c in value):
+        raise UserError(f"{where}: bad reference_solution = {value!r}; allowed: exact | "
+                        "heyoka[:precision=double|long double|real128,tol=T] | rebound[:tol=T] | none")
+    return value
+
+
+def _reference(text: str | None, problem) -> str | None:
+    """The canonical text of a cell's reference solution (None: the problem's default)."""
+    from gnibench.suite.cell.reference import parse_reference
+
+    if text is None:
+        return None
+    spec = parse_reference(text, problem.record)
+    return "none" if spec is None else spec.text()
+
+
 def _check_metrics(metrics: tuple[str, ...], problems: list, where: str) -> None:
     """Each chosen metric must be able to apply to at least one problem of the group."""
     from gnibench.suite.metrics.compute import not_applicable, parse_metrics
@@ -316,6 +346,8 @@ def _expand(group: dict, gi: int, defaults: dict, where: str, first_id: int) -> 
     steps, t_end, every = _horizon(group, defaults, where)
     metrics = _metrics(group, where)
     metrics = (defaults.get("metrics") or ()) if metrics is None else metrics
+    reference = _reference_text(group, where)
+    reference = defaults.get("reference_solution") if reference is None else reference
     problem_vary, method_vary = _vary(group, where)
     for target, opt, _ in method_vary:
         modifiers = {part.partition(":")[0].strip() for m in methods for part in split_method(m)[1:]}
@@ -336,11 +368,12 @@ def _expand(group: dict, gi: int, defaults: dict, where: str, first_id: int) -> 
                 h = grid_step(method)
                 nsteps, h_last = grid(h, steps, t_end)
                 check_budgets(problem, method, steps, t_end, every, None)
+                ref = _reference(reference, problem)
             except UserError as e:
                 raise UserError(f"{here}: {e}") from None
             cells.append(Cell(first_id + len(cells), gi, label, pspec, mspec, problem.text(),
                               method.text(), h, steps, t_end, every, nsteps,
-                              (nsteps - 1) * h + h_last, metrics))
+                              (nsteps - 1) * h + h_last, metrics, ref))
     _check_metrics(metrics, parsed_problems, where)
     return cells
 

@@ -226,5 +226,6 @@ def provenance(e: Experiment, ndone: int) -> dict:
             "versions": versions(), "complete": ndone == len(e.cells), "cells_done": ndone,
             "cells_total": len(e.cells),
             "cells": [{"cell": c.id, "problem": c.problem, "method": c.method,
-                       "steps": c.steps, "t_end": c.t_end, "every": c.every}
+                       "steps": c.steps, "t_end": c.t_end, "every": c.every,
+                       "reference": getattr(c, "reference", None)}
                       for c in e.cells]}
