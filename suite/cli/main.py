@@ -1,4 +1,4 @@
-"""The ``gnibench`` command line: solve, list, run, bench.
+"""The ``gnibench`` command line: solve, list, run, report, bench.
 
 Bad input gives one line on stderr and exit code 2 (no traceback, nothing written).
 """
@@ -101,6 +101,19 @@ def _parser() -> argparse.ArgumentParser:
                    help="address of a running Dask scheduler (with --executor dask)")
     r.add_argument("--fresh", action="store_true",
                    help="ignore the cells stored by earlier runs in the output directory")
+    r.add_argument("--no-report", action="store_true",
+                   help="do not write the report (DIR/report/index.html); summary.md is written")
+
+    rp = sub.add_parser("report", help="a static site (HTML and Markdown) from results directories")
+    rp.add_argument("dirs", nargs="+", metavar="DIR",
+                    help="results directories of gnibench run (or directories holding several)")
+    rp.add_argument("-o", "--output", type=_path, default=None, metavar="SITE",
+                    help="site directory (default: DIR/report for one DIR, ./report for several)")
+    rp.add_argument("--accuracy", metavar="EPS,...",
+                    help="accuracies of the league tables (default: 1e-4,1e-8)")
+    rp.add_argument("--benchmarks", type=_path, default=None, metavar="DIR",
+                    help="benchmark storage for the timing page (default: ./.benchmarks if it "
+                         "exists)")
 
     b = sub.add_parser("bench", help="time kernels in ns/step against a C loop")
     b.add_argument("--steps", type=int, default=2_000_000)
@@ -163,8 +176,43 @@ def _run(a) -> int:
     from gnibench.reports.markdown import render_summary
     from gnibench.suite.runs.runner import run_experiment
 
-    run_experiment(a.experiment, a.output, jobs=a.jobs, executor=a.executor,
-                   scheduler=a.scheduler, fresh=a.fresh, summarize=render_summary)
+    out = run_experiment(a.experiment, a.output, jobs=a.jobs, executor=a.executor,
+                         scheduler=a.scheduler, fresh=a.fresh, summarize=render_summary)
+    if not a.no_report:
+        from gnibench.reports.site import build_site
+
+        index = build_site([out], out / "report")
+        print(f"gnibench: report: {index}", file=sys.stderr)
+    return 0
+
+
+def _accuracies(text: str | None) -> tuple[float, ...]:
+    from gnibench.reports.league import DEFAULT_THRESHOLDS
+
+    if text is None:
+        return DEFAULT_THRESHOLDS
+    try:
+        values = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        values = ()
+    if not values or not all(0 < v < float("inf") for v in values):
+        raise UserError(f"bad --accuracy {text!r}; allowed: numbers > 0 separated by commas, "
+                        "e.g. 1e-4,1e-8")
+    return values
+
+
+def _report(a) -> int:
+    from gnibench.reports.site import build_site
+
+    thresholds = _accuracies(a.accuracy)
+    site = a.output or (Path(a.dirs[0]) / "report" if len(a.dirs) == 1 else Path("report"))
+    bench = a.benchmarks
+    if bench is None and Path(".benchmarks").is_dir():
+        bench = Path(".benchmarks")
+    if bench is not None and not bench.is_dir():
+        raise UserError(f"bad --benchmarks {bench}: not a directory")
+    index = build_site([Path(d) for d in a.dirs], site, thresholds, bench, log=sys.stderr)
+    print(f"gnibench: report: {index}", file=sys.stderr)
     return 0
 
 
@@ -178,7 +226,8 @@ def _bench(a) -> int:
 def main(argv=None) -> int:
     try:
         a = _parser().parse_args(argv)
-        return {"solve": _solve, "list": _list, "run": _run, "bench": _bench}[a.command](a)
+        return {"solve": _solve, "list": _list, "run": _run, "bench": _bench,
+                "report": _report}[a.command](a)
     except UserError as e:
         print(f"gnibench: error: {e}", file=sys.stderr)
         return 2
