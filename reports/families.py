@@ -5,7 +5,8 @@ sweep options (``h``; ``rtol``/``atol``; ``tol``; ``epsilon``) and without optio
 defaults, e.g. ``dopri5:adaptive=true,rtol=1e-08,atol=1e-08`` -> ``dopri5``,
 ``merson:adaptive=true,rtol=1e-05,atol=1e-05`` -> ``merson:adaptive=true``,
 ``heyoka-taylor:dt_out=0.01,tol=1e-10,precision=long double`` -> ``heyoka-taylor:precision=long
-double`` (when dt_out is its default). Modifiers stay part of the family.
+double`` (a step budget ``max_steps`` and an output grid ``dt_out`` are left out too). Modifiers stay part
+of the family.
 """
 from __future__ import annotations
 
@@ -14,6 +15,9 @@ from dataclasses import dataclass
 
 #: options a work-precision sweep varies: they do not name a family
 SWEEP = ("h", "rtol", "atol", "tol", "epsilon")
+#: options that do not change a method's numbers (a step budget, the output grid of external
+#: engines): left out of the family's label
+QUIET = ("max_steps", "dt_out")
 
 
 @dataclass(frozen=True)
@@ -60,7 +64,7 @@ def family_of(method: str) -> Family:
     if sweep == "h" and adaptive:
         sweep = ""
     keep = {k: v for k, v in given.items()
-            if k not in SWEEP and not (k in defaults and _same(v, defaults[k]))}
+            if k not in SWEEP and k not in QUIET and not (k in defaults and _same(v, defaults[k]))}
     label = base + (":" + ",".join(f"{k}={v}" for k, v in keep.items()) if keep else "")
     if len(parts) > 1:
         label += "+" + "+".join(parts[1:])

@@ -64,7 +64,8 @@ def wp_figures(problem: str, cells, wall_by_cell: dict[int, float], out_dir: Pat
                 good = np.isfinite(x) & (x > 0) & np.isfinite(y) & (y > 0)
                 if not good.any():
                     continue
-                order = np.argsort(x[good], kind="stable")
+                # in sweep order (coarse to fine): noisy wall times then show as they are
+                order = np.argsort(-part["sweep_value"].to_numpy(float)[good], kind="stable")
                 st = style[fam]
                 ax.plot(x[good][order], y[good][order], color=st["color"],
                         linestyle=st["linestyle"], marker=st["marker"], markersize=4,
