@@ -118,6 +118,15 @@ def _parser() -> argparse.ArgumentParser:
     b = sub.add_parser("bench", help="time kernels in ns/step against a C loop")
     b.add_argument("--steps", type=int, default=2_000_000)
     b.add_argument("--no-c", action="store_true", help="skip the gcc -O3 reference loop")
+    b.add_argument("--storage", type=_path, default=Path(".benchmarks"), metavar="DIR",
+                   help="benchmark history, pytest-benchmark's layout DIR/<machine>/NNNN_<commit>"
+                        ".json (default: .benchmarks)")
+    b.add_argument("--no-save", action="store_true", help="do not save this run in the history")
+    b.add_argument("--compare", action="store_true",
+                   help="compare the medians with the last saved run of this machine; exit 1 "
+                        "when one is more than --threshold times slower")
+    b.add_argument("--threshold", type=float, default=1.3, metavar="X",
+                   help="slowdown that fails --compare (default 1.3: 30%% slower)")
     return p
 
 
@@ -218,9 +227,13 @@ def _report(a) -> int:
 
 def _bench(a) -> int:
     from gnibench.suite.runs.bench import bench
+    from gnibench.suite.runs.benchsave import save_and_compare
 
-    bench(steps=a.steps, with_c=not a.no_c)
-    return 0
+    if not a.threshold > 1.0:
+        raise UserError(f"bad --threshold {a.threshold}; allowed: a number > 1 (e.g. 1.3)")
+    rows = bench(steps=a.steps, with_c=not a.no_c)
+    return save_and_compare(rows, a.storage, save=not a.no_save, against=a.compare,
+                            threshold=a.threshold)
 
 
 def main(argv=None) -> int:

@@ -1,6 +1,6 @@
 """Benchmark history on disk, in pytest-benchmark's storage layout.
 
-``<storage>/<machine>/NNNN_<commit>[_uncommitted-changes].json``, one file per saved run, with
+``<storage>/<machine>/NNNN_<commit>_<time>[_uncommitted-changes].json``, one file per saved run, with
 pytest-benchmark's JSON (``machine_info``, ``commit_info``, ``datetime``, ``benchmarks``: each
 with ``name``, ``fullname``, ``group``, ``stats`` {min, median, mean, max, rounds, ...} in seconds,
 ``extra_info``). The pytest-benchmark suite (``pytest benchmarks --benchmark-only``, autosaving)
@@ -71,7 +71,8 @@ def save_run(storage: Path, benchmarks: list[dict], commit: dict | None = None,
     d = Path(storage) / machine
     d.mkdir(parents=True, exist_ok=True)
     numbers = [int(_RUN.match(f.name).group(1)) for f in d.iterdir() if _RUN.match(f.name)]
-    tag = (commit.get("id") or "unversioned") + ("_uncommitted-changes" if commit.get("dirty") else "")
+    tag = ((commit.get("id") or "unversioned") + time.strftime("_%Y%m%d_%H%M%S")
+           + ("_uncommitted-changes" if commit.get("dirty") else ""))
     path = d / f"{max(numbers, default=0) + 1:04d}_{tag}.json"
     doc = {"machine_info": {"node": platform.node(), "machine": platform.machine(),
                             "system": platform.system(), "python_version": platform.python_version(),
