@@ -77,7 +77,8 @@ def wp_figures(problem: str, cells, wall_by_cell: dict[int, float], out_dir: Pat
             ax.set_ylabel(label)
     axes[0][0].set_title("against f-evaluations", fontsize=10)
     axes[0][1].set_title("against wall time", fontsize=10)
-    fig.suptitle(f"{problem}: work-precision", fontsize=11, x=0.45, y=0.995)
+    name = problem if len(problem) <= 60 else problem[:57] + "…"
+    fig.suptitle(f"{name}: work-precision", fontsize=11, x=0.42, y=0.995)
     handles, labels = [], []
     for ax in axes.ravel():
         for h, lab in zip(*ax.get_legend_handles_labels()):
@@ -85,7 +86,8 @@ def wp_figures(problem: str, cells, wall_by_cell: dict[int, float], out_dir: Pat
                 handles.append(h)
                 labels.append(lab)
     if handles:
-        fig.legend(handles, labels, loc="upper right", fontsize=7.5, framealpha=0.9)
+        fig.legend(handles, labels, loc="upper right", bbox_to_anchor=(1.0, 0.955), fontsize=7.5,
+                   framealpha=0.9)
     layout(fig, len(rows), right=0.78 if handles else 0.98)
     fig.subplots_adjust(top=1 - 0.75 / fig.get_size_inches()[1])
     file = _save(fig, out_dir, f"{prefix}-work-precision.png")
