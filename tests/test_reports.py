@@ -187,3 +187,27 @@ def test_run_writes_the_report_unless_told_not(tmp_path, capsys):
     assert (tmp_path / "a" / "report" / "t.md").is_file() and (tmp_path / "a" / "summary.md").is_file()
     assert main(["run", str(path), "-o", str(tmp_path / "b"), "-j", "1", "--no-report"]) == 0
     assert (tmp_path / "b" / "summary.md").is_file() and not (tmp_path / "b" / "report").exists()
+
+
+def test_tiny_work_precision_with_competitors(tmp_path):
+    """A tiny variant of wp-kepler-2d: adaptive, heyoka and IAS15 sweeps in one run; the engines
+    that count no f-evaluations are drawn against wall time only, and the page says so."""
+    from gnibench.suite.runs.runner import run_experiment
+
+    path = tmp_path / "wp.toml"
+    path.write_text('name = "wp-tiny"\ntitle = "tiny wp"\nreference = "r"\n'
+                    't_end = 6.283185307179586\nevery = 1000\n'
+                    '[[cells]]\nproblems = ["kepler-2d"]\nmethods = ["dop853:atol=1e-14"]\n'
+                    'vary.rtol = [1e-6, 1e-9]\n'
+                    '[[cells]]\nproblems = ["kepler-2d"]\nmethods = ["heyoka-taylor:dt_out=3.14"]\n'
+                    'vary.tol = [1e-9, 1e-15]\n'
+                    '[[cells]]\nproblems = ["kepler-2d"]\nmethods = ["rebound-ias15:dt_out=3.14"]\n'
+                    'vary.epsilon = [1e-4, 1e-9]\n')
+    out = run_experiment(path, tmp_path / "out", jobs=1, log=open("/dev/null", "w"))  # noqa: SIM115
+    build_site([out], tmp_path / "site", thresholds=(1e-6,))
+    html = (tmp_path / "site" / "wp-tiny.html").read_text()
+    assert "heyoka-taylor, rebound-ias15 do not count f-evaluations" in html
+    assert "wp-tiny/00-kepler-2d_e_0.6-work-precision.png" in html
+    rows = re.findall(r"<tr>\s*<td>([^<]*)</td><td><code>([^<]*)</code></td>", html)
+    ranks = {fam: rank for rank, fam in rows}
+    assert ranks["dop853"] == "1" and ranks["heyoka-taylor"] == "–" and ranks["rebound-ias15"] == "–"
