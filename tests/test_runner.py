@@ -88,7 +88,7 @@ vary.problem.p0 = [0.7, 1.4]
 def test_run_end_to_end(tiny, tmp_path, failing_cell, capsys):
     out = tmp_path / "out"
     assert main(["run", str(tiny), "-o", str(out)]) == 0
-    assert sorted(p.name for p in out.iterdir()) == sorted(OUTPUTS + STORE)
+    assert sorted(p.name for p in out.iterdir()) == sorted(OUTPUTS + STORE + ("report",))
     cells = pd.read_parquet(out / "cells.parquet")
     assert list(cells["status"]) == ["ok", "nonfinite", "error"]
     assert cells["reason"][1].startswith("state overflowed")
@@ -105,7 +105,8 @@ def test_run_end_to_end(tiny, tmp_path, failing_cell, capsys):
     summary = (out / "summary.md").read_text()
     assert "Tiny test experiment" in summary and "RuntimeError: boom" in summary
     assert summary_from_dir(out) == summary          # the report is a function of the tables
-    assert len(capsys.readouterr().err.strip().splitlines()) == 4      # header + a line per cell
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 5 and err[-1].startswith("gnibench: report: ")   # header, cells, report
 
 
 def test_two_runs_are_bit_identical(tiny, tmp_path):

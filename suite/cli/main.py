@@ -1,4 +1,4 @@
-"""The ``gnibench`` command line: solve, list, run, reproduce, bench.
+"""The ``gnibench`` command line: solve, list, run, report, reproduce, verify, bench.
 
 Bad input gives one line on stderr and exit code 2 (no traceback, nothing written).
 """
@@ -124,10 +124,32 @@ def _parser() -> argparse.ArgumentParser:
     v.add_argument("-j", "--jobs", type=int, default=None, metavar="N")
     v.add_argument("--executor", default="local", metavar="local|dask")
     v.add_argument("--scheduler", metavar="ADDRESS")
+    r.add_argument("--no-report", action="store_true",
+                   help="do not write the report (DIR/report/index.html); summary.md is written")
+
+    rp = sub.add_parser("report", help="a static site (HTML and Markdown) from results directories")
+    rp.add_argument("dirs", nargs="+", metavar="DIR",
+                    help="results directories of gnibench run (or directories holding several)")
+    rp.add_argument("-o", "--output", type=_path, default=None, metavar="SITE",
+                    help="site directory (default: DIR/report for one DIR, ./report for several)")
+    rp.add_argument("--accuracy", metavar="EPS,...",
+                    help="accuracies of the league tables (default: 1e-4,1e-8)")
+    rp.add_argument("--benchmarks", type=_path, default=None, metavar="DIR",
+                    help="benchmark storage for the timing page (default: ./.benchmarks if it "
+                         "exists)")
 
     b = sub.add_parser("bench", help="time kernels in ns/step against a C loop")
     b.add_argument("--steps", type=int, default=2_000_000)
     b.add_argument("--no-c", action="store_true", help="skip the gcc -O3 reference loop")
+    b.add_argument("--storage", type=_path, default=Path(".benchmarks"), metavar="DIR",
+                   help="benchmark history, pytest-benchmark's layout DIR/<machine>/NNNN_<commit>"
+                        ".json (default: .benchmarks)")
+    b.add_argument("--no-save", action="store_true", help="do not save this run in the history")
+    b.add_argument("--compare", action="store_true",
+                   help="compare the medians with the last saved run of this machine; exit 1 "
+                        "when one is more than --threshold times slower")
+    b.add_argument("--threshold", type=float, default=1.3, metavar="X",
+                   help="slowdown that fails --compare (default 1.3: 30%% slower)")
     return p
 
 
@@ -190,17 +212,56 @@ def _run(a) -> int:
     from gnibench.reports.markdown import render_summary
     from gnibench.suite.runs.runner import run_experiment
 
-    run_experiment(a.experiment, a.output, jobs=a.jobs, executor=a.executor,
-                   scheduler=a.scheduler, fresh=a.fresh, summarize=render_summary,
-                   scale=a.scale)
+    out = run_experiment(a.experiment, a.output, jobs=a.jobs, executor=a.executor,
+                         scheduler=a.scheduler, fresh=a.fresh, summarize=render_summary,
+                         scale=a.scale)
+    if not a.no_report:
+        from gnibench.reports.site import build_site
+
+        index = build_site([out], out / "report")
+        print(f"gnibench: report: {index}", file=sys.stderr)
+    return 0
+
+
+def _accuracies(text: str | None) -> tuple[float, ...]:
+    from gnibench.reports.league import DEFAULT_THRESHOLDS
+
+    if text is None:
+        return DEFAULT_THRESHOLDS
+    try:
+        values = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        values = ()
+    if not values or not all(0 < v < float("inf") for v in values):
+        raise UserError(f"bad --accuracy {text!r}; allowed: numbers > 0 separated by commas, "
+                        "e.g. 1e-4,1e-8")
+    return values
+
+
+def _report(a) -> int:
+    from gnibench.reports.site import build_site
+
+    thresholds = _accuracies(a.accuracy)
+    site = a.output or (Path(a.dirs[0]) / "report" if len(a.dirs) == 1 else Path("report"))
+    bench = a.benchmarks
+    if bench is None and Path(".benchmarks").is_dir():
+        bench = Path(".benchmarks")
+    if bench is not None and not bench.is_dir():
+        raise UserError(f"bad --benchmarks {bench}: not a directory")
+    index = build_site([Path(d) for d in a.dirs], site, thresholds, bench, log=sys.stderr)
+    print(f"gnibench: report: {index}", file=sys.stderr)
     return 0
 
 
 def _bench(a) -> int:
     from gnibench.suite.runs.bench import bench
+    from gnibench.suite.runs.benchsave import save_and_compare
 
-    bench(steps=a.steps, with_c=not a.no_c)
-    return 0
+    if not a.threshold > 1.0:
+        raise UserError(f"bad --threshold {a.threshold}; allowed: a number > 1 (e.g. 1.3)")
+    rows = bench(steps=a.steps, with_c=not a.no_c)
+    return save_and_compare(rows, a.storage, save=not a.no_save, against=a.compare,
+                            threshold=a.threshold)
 
 
 def main(argv=None) -> int:
@@ -209,7 +270,7 @@ def main(argv=None) -> int:
         from gnibench.suite.cli.reproduce import run as _reproduce
 
         commands = {"solve": _solve, "list": _list, "run": _run, "reproduce": _reproduce,
-                    "bench": _bench}
+                    "bench": _bench, "report": _report}
         if a.command == "verify":
             from gnibench.suite.cli.verify import verify_command
 

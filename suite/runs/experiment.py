@@ -11,6 +11,8 @@ An experiment is a TOML file, given by path or by the name of one shipped in
     every = 1                        # default sampling: a sample every K steps (plus the last)
     metrics = ["growth:of=H"]        # optional: metrics beside the defaults (gnibench list metrics)
     dt_out = 0.5                     # optional: samples at t = k dt_out (every K-th) plus the last
+    reference_solution = "heyoka:precision=long double"   # optional: what global_error is
+                                     # measured against (exact | heyoka[:...] | rebound[:...] | none)
 
     [[cells]]                        # a group; the cells are problems x methods x vary values
     label    = "symplectic Euler"    # optional, shown in the summary
@@ -20,6 +22,7 @@ An experiment is a TOML file, given by path or by the name of one shipped in
     every = 1                        # optional
     metrics = ["precession"]         # optional: replaces the top-level metrics for this group
     dt_out = 0.5                     # optional: replaces the top-level time grid for this group
+    reference_solution = "exact"     # optional: replaces the top-level reference for this group
     vary.h = [0.3, 0.15]             # a base-method option, one cell per value
     vary.problem.p0 = [0.7, 1.4]     # a problem option
     vary.observer.theta = [1, 15]    # an option of a modifier (only methods that have it)
@@ -50,9 +53,9 @@ from gnibench.suite.foundation.errors import UserError, unknown
 from gnibench.suite.foundation.params import format_float
 
 TOP_KEYS = ("name", "title", "reference", "description", "t_end", "steps", "every", "dt_out",
-            "metrics", "cells", "scale", "figure")
-GROUP_KEYS = ("label", "problems", "methods", "t_end", "steps", "every", "dt_out", "metrics", "vary",
-              "points", "scale")
+            "metrics", "reference_solution", "cells", "scale", "figure")
+GROUP_KEYS = ("label", "problems", "methods", "t_end", "steps", "every", "dt_out", "metrics",
+              "reference_solution", "vary", "points", "scale")
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]*$")
 
 
@@ -62,7 +65,10 @@ class Cell:
 
     ``problem_spec``/``method_spec`` are the texts given to :func:`gnibench.suite.cell.solve.solve`;
     ``problem``/``method`` are their canonical texts (what the tables show); ``metrics`` the
-    canonical texts of the chosen metrics (beside the default ones).
+    canonical texts of the chosen metrics (beside the default ones); ``reference`` the canonical
+    text of the chosen reference solution (:func:`gnibench.suite.cell.reference.parse_reference`:
+    ``exact``, ``heyoka:precision=...,tol=...``, ``rebound:tol=...`` or ``none``), None for the
+    default (the exact solution where the problem has one).
     """
 
     id: int
@@ -80,6 +86,7 @@ class Cell:
     t_final: float
     metrics: tuple[str, ...] = ()
     dt_out: float | None = None     # time grid (suite/cell/timegrid.py); the specs stay as given
+    reference: str | None = None
 
 
 @dataclass(frozen=True)
@@ -157,12 +164,13 @@ def parse_experiment(text: str, source: str, scale: str = "paper") -> Experiment
     planned = sum(_planned_cells(g, f"{source}: cells[{gi}]") for gi, g in enumerate(groups))
     check_count(planned, f"{source}", "GNIBENCH_MAX_CELLS", "cells")
     defaults["metrics"] = _metrics(doc, source)
+    defaults["reference_solution"] = _reference_text(doc, source)
     cells: list[Cell] = []
     for gi, group in enumerate(groups):
         cells.extend(_expand(group, gi, defaults, f"{source}: cells[{gi}]", len(cells)))
     seen: dict[tuple, int] = {}
     for c in cells:
-        key = (c.problem, c.method, c.steps, c.t_end, c.every, c.dt_out)
+        key = (c.problem, c.method, c.steps, c.t_end, c.every, c.dt_out, c.reference)
         if key in seen:
             raise UserError(f"{source}: cell {c.id} ({c.problem} {c.method}) duplicates cell "
                             f"{seen[key]}; allowed: each cell once")
@@ -294,6 +302,27 @@ def _metrics(table: dict, where: str) -> tuple[str, ...] | None:
         raise UserError(f"{where}: metrics: {e}") from None
 
 
+def _reference_text(table: dict, where: str) -> str | None:
+    """The ``reference_solution`` string of a table (None when absent); each cell checks it."""
+    if "reference_solution" not in table:
+        return None
+    value = table["reference_solution"]
+    if not isinstance(value, str) or not value.strip() or any(not c.isprintable() for c in value):
+        raise UserError(f"{where}: bad reference_solution = {value!r}; allowed: exact | "
+                        "heyoka[:precision=double|long double|real128,tol=T] | rebound[:tol=T] | none")
+    return value
+
+
+def _reference(text: str | None, problem) -> str | None:
+    """The canonical text of a cell's reference solution (None: the problem's default)."""
+    from gnibench.suite.cell.reference import parse_reference
+
+    if text is None:
+        return None
+    spec = parse_reference(text, problem.record)
+    return "none" if spec is None else spec.text()
+
+
 def _check_metrics(metrics: tuple[str, ...], problems: list, where: str) -> None:
     """Each chosen metric must be able to apply to at least one problem of the group."""
     from gnibench.suite.metrics.compute import not_applicable, parse_metrics
@@ -354,6 +383,8 @@ def _expand(group: dict, gi: int, defaults: dict, where: str, first_id: int) -> 
     metrics = _metrics(group, where)
     metrics = (defaults.get("metrics") or ()) if metrics is None else metrics
     dt_out = _dt_out(group, defaults, where)
+    reference = _reference_text(group, where)
+    reference = defaults.get("reference_solution") if reference is None else reference
     problem_vary, method_vary = _vary(group, where)
     points = [{}]
     if "points" in group:
@@ -387,11 +418,12 @@ def _expand(group: dict, gi: int, defaults: dict, where: str, first_id: int) -> 
                 h = grid_step(method)
                 nsteps, h_last = grid(h, steps, t_end)
                 check_budgets(problem, method, steps, t_end, every, None, dt_out)
+                ref = _reference(reference, problem)
             except UserError as e:
                 raise UserError(f"{here}: {e}") from None
             cells.append(Cell(first_id + len(cells), gi, label, pspec, mspec, problem.text(),
                               method.text(), h, steps, t_end, every, nsteps,
-                              (nsteps - 1) * h + h_last, metrics, dt_out=dt_out))
+                              (nsteps - 1) * h + h_last, metrics, dt_out=dt_out, reference=ref))
     _check_metrics(metrics, parsed_problems, where)
     return cells
 

@@ -11,7 +11,7 @@ Layout of ``<out>/``::
                                finish and at the end)
 
 The key of a part is a content hash of everything that determines its numbers: the canonical cell
-(problem and method specs, horizon, sampling, metrics), the source code that computes it
+(problem and method specs, horizon, sampling, metrics, reference solution), the source code that computes it
 (problems, methods and their kernels, the cell layer, the metrics and the tables: a fingerprint of
 those files) and the package versions. Running the same experiment again reuses every part whose
 key matches and computes only the missing cells; a cell whose spec or code changed gets a new key
@@ -70,6 +70,8 @@ def cell_key(cell) -> str:
            "steps": cell.steps, "t_end": cell.t_end, "every": cell.every,
            "dt_out": getattr(cell, "dt_out", None), "metrics": list(cell.metrics),
            "code": code_fingerprint(), "versions": v}
+    if getattr(cell, "reference", None) is not None:     # what global_error is measured against
+        doc["reference"] = cell.reference
     return hashlib.sha256(json.dumps(doc, sort_keys=True, default=str).encode()).hexdigest()[:32]
 
 

@@ -79,7 +79,8 @@ def cell_row(cell, traj=None, metrics=None, status: str = "pending", reason: str
            "steps_planned": cell.nsteps, "every": cell.every,
            "dt_out": np.nan if cell.dt_out is None else cell.dt_out, "status": status, "reason": reason,
            "steps": None, "t_final": np.nan, "nfev": np.nan, "njev": np.nan, "samples": None,
-           "integrals": "", "metrics": join_metrics(cell.metrics), "metric_notes": notes,
+           "integrals": "", "reference": getattr(cell, "reference", None) or "",
+           "metrics": join_metrics(cell.metrics), "metric_notes": notes,
            "final_global_error": np.nan, "max_global_error": np.nan}
     if traj is None:
         return row
@@ -89,7 +90,8 @@ def cell_row(cell, traj=None, metrics=None, status: str = "pending", reason: str
                t_final=float(traj.t[last]) if last >= 0 else np.nan,
                nfev=float(traj.nfev[last]) if last >= 0 else np.nan,
                njev=float(traj.njev[last]) if last >= 0 else np.nan, samples=len(traj.t),
-               integrals="/".join(traj.integral_names))
+               integrals="/".join(traj.integral_names),
+               reference=traj.reference.describe["spec"] if traj.reference is not None else "")
     if metrics is not None:
         row.update(metrics.scalars)
     return row
@@ -134,7 +136,7 @@ def samples_table(parts: list[tuple[pd.DataFrame, tuple[str, ...]]],
 
 _CELL_COLUMNS = ("cell", "group", "label", "problem", "method", "h", "t_end", "steps_planned",
                  "every", "dt_out", "status", "reason", "steps", "t_final", "nfev", "njev", "samples",
-                 "integrals", "metrics", "metric_notes")
+                 "integrals", "reference", "metrics", "metric_notes")
 
 
 def cells_table(rows: list[dict]) -> pd.DataFrame:

@@ -1,0 +1,174 @@
+"""Reading results directories back: the tables and metadata a report is drawn from.
+
+A results directory is what ``gnibench run`` writes (``cells.parquet``, ``samples.parquet``,
+``timings.parquet``), or a directory holding several of those one level down (``gnibench verify``
+writes one per experiment, next to ``ledger.parquet``). A results directory may also hold
+``figure/figure.json``, the manifest of a reproduced figure ([`gnibench reproduce`]): its images,
+caption and notes go on the experiment's page. Only tables and files are read; nothing is
+integrated.
+"""
+from __future__ import annotations
+
+import json
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from gnibench.reports.families import add_families
+from gnibench.suite.foundation.errors import UserError
+
+IMAGE_SUFFIXES = (".png", ".svg")
+
+
+@dataclass
+class Results:
+    """One experiment's results: its directory, provenance, cells (with family columns) and
+    timings; samples are read on demand (they can be large)."""
+
+    dir: Path
+    meta: dict
+    cells: object
+    timings: object
+    written_at: str = ""
+    figure: dict | None = None
+    figure_error: str = ""
+
+    @property
+    def name(self) -> str:
+        return str(self.meta.get("experiment") or self.dir.name)
+
+    def samples(self, columns: list[str] | None = None):
+        import pandas as pd
+        import pyarrow.parquet as pq
+
+        path = self.dir / "samples.parquet"
+        have = set(pq.read_schema(path).names)
+        cols = None if columns is None else [c for c in columns if c in have]
+        return pd.read_parquet(path, columns=cols)
+
+    def wall_by_cell(self) -> dict[int, float]:
+        t = self.timings
+        return {int(c): float(w) for c, w in zip(t["cell"], t["wall_seconds"])} if len(t) else {}
+
+
+@dataclass
+class Ledger:
+    """A claims ledger (``ledger.parquet`` of ``gnibench verify``), shown as a table."""
+
+    dir: Path
+    table: object
+    meta: dict = field(default_factory=dict)
+
+
+def parquet_meta(path: Path) -> dict:
+    """The provenance (schema metadata key ``gnibench``) of a Parquet file."""
+    import pyarrow.parquet as pq
+
+    md = pq.read_schema(path).metadata or {}
+    return json.loads(md.get(b"gnibench", b"{}"))
+
+
+def is_results_dir(path: Path) -> bool:
+    return all((path / f).is_file() for f in ("cells.parquet", "samples.parquet", "timings.parquet"))
+
+
+def load_results(path: Path) -> Results:
+    """Read one results directory (see the module docstring)."""
+    import pandas as pd
+
+    path = Path(path)
+    meta = parquet_meta(path / "cells.parquet")
+    cells = add_families(pd.read_parquet(path / "cells.parquet"))
+    timings = pd.read_parquet(path / "timings.parquet")
+    written = str(parquet_meta(path / "timings.parquet").get("written_at", ""))
+    res = Results(path, meta, cells, timings, written)
+    if (path / "figure" / "figure.json").exists():
+        try:
+            res.figure = load_manifest(path / "figure")
+        except (ValueError, TypeError, OSError) as e:
+            res.figure_error = f"figure/figure.json could not be used: {e}"
+    return res
+
+
+def find_results(dirs: list[Path]) -> tuple[list[Results], list[Ledger]]:
+    """Every results directory given, or one level below a given directory; ledgers beside them.
+    A directory with neither is a one-line UserError."""
+    import pandas as pd
+
+    found: list[Results] = []
+    ledgers: list[Ledger] = []
+    for d in dirs:
+        d = Path(d)
+        if not d.is_dir():
+            raise UserError(f"no results directory {str(d)!r}")
+        inner = [d] if is_results_dir(d) else sorted(p for p in d.iterdir()
+                                                       if p.is_dir() and is_results_dir(p))
+        if (d / "ledger.parquet").is_file():
+            ledgers.append(Ledger(d, pd.read_parquet(d / "ledger.parquet"),
+                                  parquet_meta(d / "ledger.parquet")))
+        if not inner and not (d / "ledger.parquet").is_file():
+            raise UserError(f"{d} holds no results (cells.parquet, samples.parquet, "
+                            "timings.parquet), here or one level down; allowed: the output "
+                            "directory of gnibench run or verify")
+        found += [load_results(p) for p in inner]
+    return found, ledgers
+
+
+def _strings(value, what: str) -> list[str]:
+    if value is None:
+        return []
+    if isinstance(value, str):
+        return [value]
+    if isinstance(value, list) and all(isinstance(v, str) for v in value):
+        return value
+    raise TypeError(f"{what} must be a string or a list of strings")
+
+
+def load_manifest(figure_dir: Path) -> dict:
+    """A reproduced figure's manifest, checked: its image files must be PNG or SVG files inside
+    ``figure_dir`` (no absolute paths, no ``..``). Returns a plain dict of strings and lists:
+    id, number, caption, reference, scale, notes, images (relative paths), panels (title, x and
+    y labels, curve labels)."""
+    doc = json.loads((figure_dir / "figure.json").read_text(encoding="utf-8"))
+    if not isinstance(doc, dict):
+        raise TypeError("the manifest is not a JSON object")
+    files = doc.get("files", [])
+    if isinstance(files, dict):
+        files = list(files.values())
+    files = _strings(files, "files")
+    root = figure_dir.resolve()
+    images = []
+    for f in files:
+        target = (figure_dir / f).resolve()
+        if Path(f).is_absolute() or not target.is_relative_to(root):
+            raise ValueError(f"file {f!r} lies outside figure/")
+        if target.suffix.lower() == ".md":
+            continue                    # a table figure's table.md: not an image
+        if target.suffix.lower() not in IMAGE_SUFFIXES:
+            raise ValueError(f"file {f!r} is not a PNG or SVG image (or a table's .md)")
+        if not target.is_file():
+            raise ValueError(f"file {f!r} does not exist")
+        images.append(target.relative_to(root).as_posix())
+    if any(i.lower().endswith(".png") for i in images):   # the PNG is shown; its SVG twin is not
+        images = [i for i in images if i.lower().endswith(".png")]
+    panels = []
+    for p in doc.get("panels", []) or []:
+        if not isinstance(p, dict):
+            raise TypeError("a panel must be an object")
+        curves = [c.get("label", "") if isinstance(c, dict) else str(c) for c in p.get("curves", [])]
+        panels.append({k: str(p.get(k, "") or "") for k in ("id", "title", "xlabel", "ylabel")}
+                      | {"curves": [str(c) for c in curves]})
+    text = {k: "" if doc.get(k) is None else str(doc.get(k))
+            for k in ("id", "number", "caption", "reference", "scale")}
+    notes = _strings(doc.get("notes"), "notes") + _strings(doc.get("note") or None, "note")
+    return {**text, "notes": notes, "images": images,
+            "panels": panels}
+
+
+_SLUG = re.compile(r"[^A-Za-z0-9._-]+")
+
+
+def slug(text: str) -> str:
+    """A file-name-safe form of a name (letters, digits, . _ -)."""
+    s = _SLUG.sub("_", str(text)).strip("._") or "x"
+    return s[:60]

@@ -1,0 +1,146 @@
+"""``gnibench report``: a static site (HTML, and the same content as GitHub-readable Markdown) from
+one or more results directories.
+
+Layout of the site directory::
+
+    index.html, index.md            the experiments, with links
+    <experiment>.html, .md          one page per experiment (reports/pages.py)
+    timing.html, timing.md          benchmark history (with a benchmark storage directory)
+    <ledger>.html, .md              a claims ledger (gnibench verify), as a table
+    img/<experiment>/*.png          figures; img/<experiment>/figure/ the reproduced figure's files
+
+Every page works offline from ``file://``: styles are inline, images local, no script. Every
+string that comes from a user or a file goes through the template engine: HTML with Jinja2's
+autoescape; Markdown through :func:`gnibench.reports.markdown.escape` (the environment's
+``finalize``), specs in code spans that cannot be broken out of, the TOML text in a fence longer
+than any backtick run inside it.
+"""
+from __future__ import annotations
+
+import re
+import shutil
+import time
+from pathlib import Path
+from urllib.parse import quote
+
+from gnibench.reports.league import DEFAULT_THRESHOLDS
+from gnibench.reports.markdown import code, escape
+from gnibench.reports.pages import experiment_page, index_entry
+from gnibench.reports.results import find_results, slug
+
+_NUMBER = re.compile(r"^(–|-?inf|-?\d+(\.\d+)?(e[+-]?\d+)?)$")
+
+
+def _environments():
+    import jinja2
+    from markupsafe import Markup
+
+    loader = jinja2.PackageLoader("gnibench.reports", "templates")
+    html = jinja2.Environment(loader=loader, autoescape=True, trim_blocks=False,
+                              undefined=jinja2.StrictUndefined)
+
+    def md_finalize(value):
+        if isinstance(value, Markup):
+            return str(value)
+        text = "" if value is None else str(value)
+        return text if _NUMBER.match(text) else escape(text)
+
+    def code_span(value):
+        return Markup(code(value))
+
+    def code_cell(value):                # GFM splits table cells at |, also inside code spans
+        return Markup(code(value).replace("|", "\\|"))
+
+    def fence(value):
+        text = str(value).replace("\r", "")
+        longest = max((len(m) for m in re.findall(r"`+", text)), default=0)
+        bar = "`" * max(3, longest + 1)
+        return Markup(f"{bar}toml\n{text.rstrip()}\n{bar}")
+
+    def link(value):
+        return Markup(quote(str(value), safe="/._-"))
+
+    md = jinja2.Environment(loader=loader, autoescape=False, finalize=md_finalize,
+                            undefined=jinja2.StrictUndefined)
+    md.filters.update(code=code_span, code_cell=code_cell, fence=fence, link=link)
+    return html, md
+
+
+def _write(path: Path, text: str) -> None:
+    path.write_text(text, encoding="utf-8")
+
+
+def _copy_figure(res, img_dir: Path) -> None:
+    if not res.figure:
+        return
+    dest = img_dir / "figure"
+    for f in res.figure["images"]:
+        target = dest / f
+        target.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(res.dir / "figure" / f, target)
+
+
+def _unique(name: str, taken: set[str]) -> str:
+    base, k = slug(name), 2
+    out = base
+    while out in taken or out in ("index", "timing", "img"):
+        out, k = f"{base}-{k}", k + 1
+    taken.add(out)
+    return out
+
+
+def ledger_page(ledger, name: str) -> dict:
+    """A claims ledger as a plain table (every column as it is in ledger.parquet)."""
+    from gnibench.reports.pages import num
+
+    df = ledger.table
+    rows = [[num(v) if isinstance(v, float) else str(v) for v in r]
+            for r in df.itertuples(index=False)]
+    return {"title": f"Claims ledger ({ledger.dir.name})", "name": name,
+            "paragraphs": [f"{len(df)} claims, from {ledger.dir / 'ledger.parquet'}."],
+            "figures": [], "header": [str(c) for c in df.columns], "rows": rows, "code": []}
+
+
+def build_site(dirs: list[Path], site: Path, thresholds=DEFAULT_THRESHOLDS,
+               benchmarks: Path | None = None, log=None) -> Path:
+    """Write the site for the results directories ``dirs`` into ``site``; return index.html.
+
+    ``thresholds``: the accuracies ε of the league tables. ``benchmarks``: a benchmark storage
+    directory (pytest-benchmark layout, ``<machine>/NNNN_<commit>.json``) for the timing page.
+    """
+    from gnibench.reports.timing import timing_page
+
+    found, ledgers = find_results(dirs)
+    site = Path(site)
+    site.mkdir(parents=True, exist_ok=True)
+    img = site / "img"
+    html, md = _environments()
+    taken: set[str] = set()
+    pages = []
+    for res in found:
+        name = _unique(res.name, taken)
+        img_dir = img / name
+        if img_dir.exists():
+            shutil.rmtree(img_dir)
+        img_dir.mkdir(parents=True)
+        pages.append(experiment_page(res, img_dir, name, thresholds))
+        _copy_figure(res, img_dir)
+        if log is not None:
+            print(f"gnibench: report: {res.name} ({len(res.cells)} cells)", file=log, flush=True)
+    ledger_pages = [ledger_page(lg, _unique(f"ledger-{lg.dir.name}", taken)) for lg in ledgers]
+    timing = timing_page(benchmarks, img / "timing", "timing") if benchmarks else None
+    common = {"nav": [{"slug": p["slug"], "name": p["name"]} for p in pages],
+              "has_timing": timing is not None,
+              "ledgers": [{"slug": lp["name"], "name": lp["title"], "rows": lp["rows"]}
+                          for lp in ledger_pages],
+              "generated": time.strftime("%Y-%m-%d %H:%M")}
+    for p in pages:
+        _write(site / f"{p['slug']}.html", html.get_template("experiment.html").render(p=p, **common))
+        _write(site / f"{p['slug']}.md", md.get_template("experiment.md").render(p=p, **common))
+    for t, name in [(lp, lp["name"]) for lp in ledger_pages] + ([(timing, "timing")] if timing else []):
+        _write(site / f"{name}.html", html.get_template("table.html").render(t=t, **common))
+        _write(site / f"{name}.md", md.get_template("table.md").render(t=t, **common))
+    entries = [index_entry(p) for p in pages]
+    _write(site / "index.html", html.get_template("index.html").render(entries=entries, **common))
+    _write(site / "index.md", md.get_template("index.md").render(entries=entries, **common))
+    return site / "index.html"

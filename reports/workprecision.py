@@ -1,0 +1,105 @@
+"""Work-precision diagrams (as DiffEqDevTools' WorkPrecisionSet draws them): error against cost,
+log–log, one curve per method family, the points of a curve being its step-size or tolerance
+sweep.
+
+Per problem, one figure per error measure — final global error, maximum global error (with a
+reference), maximum |I(y) − I(y0)| of the problem's first integral — each with two panels: against
+``nfev`` (reproducible) and against the integration wall time from ``timings.parquet`` (not
+reproducible; compilation excluded). Engines that do not count evaluations (heyoka, IAS15: nfev
+NaN) appear on the wall-time panels only. Only ``ok`` cells with a finite, positive error are
+drawn; the page lists the others.
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+from gnibench.reports.plots import Figure, _save, layout, pyplot
+from gnibench.reports.palette import styles
+
+
+def has_sweeps(cells) -> bool:
+    """True when some family of the cells has two or more cells (a curve to draw)."""
+    return bool((cells.groupby("family")["cell"].count() >= 2).any())
+
+
+def measures(cells) -> list[tuple[str, str]]:
+    """(column, axis label) of the error measures present in a problem's cells."""
+    out = []
+    for col, label in (("final_global_error", "final global error"),
+                       ("max_global_error", "max global error over the samples")):
+        if col in cells and cells[col].notna().any():
+            out.append((col, label))
+    first = [i for i in str(cells["integrals"].iloc[0] or "").split("/") if i]
+    if first and f"max_abs_err_{first[0]}" in cells:
+        out.append((f"max_abs_err_{first[0]}", f"max |{first[0]}(y) − {first[0]}(y0)|"))
+    return out
+
+
+def no_nfev(cells) -> list[str]:
+    """The families whose cells do not count f-evaluations (drawn against wall time only)."""
+    fams = cells.groupby("family", sort=False)["nfev"].apply(lambda s: s.isna().all())
+    return [str(f) for f, missing in fams.items() if missing]
+
+
+def wp_figures(problem: str, cells, wall_by_cell: dict[int, float], out_dir: Path, prefix: str,
+               slug: str) -> list[Figure]:
+    """The work-precision figures of one problem's cells (with family columns)."""
+    plt = pyplot()
+    fams = list(dict.fromkeys(cells["family"]))
+    style = styles(fams, dict(zip(cells["family"], cells["adaptive"])))
+    ok = cells[cells["status"] == "ok"].copy()
+    ok["wall_ms"] = [wall_by_cell.get(int(c), math.nan) * 1e3 for c in ok["cell"]]
+    rows = measures(cells)
+    if not rows:
+        return []
+    fig, axes = plt.subplots(len(rows), 2, figsize=(12.4, 3.9 * len(rows) + 0.6), squeeze=False)
+    for (col, label), pair in zip(rows, axes):
+        for ax, (xcol, xlabel) in zip(pair, (("nfev", "f-evaluations (nfev)"),
+                                             ("wall_ms", "wall time (ms, integration only)"))):
+            for fam in fams:
+                part = ok[ok["family"] == fam]
+                x, y = part[xcol].to_numpy(float), part[col].to_numpy(float)
+                good = np.isfinite(x) & (x > 0) & np.isfinite(y) & (y > 0)
+                if not good.any():
+                    continue
+                # in sweep order (coarse to fine): noisy wall times then show as they are
+                order = np.argsort(-part["sweep_value"].to_numpy(float)[good], kind="stable")
+                st = style[fam]
+                ax.plot(x[good][order], y[good][order], color=st["color"],
+                        linestyle=st["linestyle"], marker=st["marker"], markersize=4,
+                        linewidth=1.2, label=fam if len(fam) <= 40 else fam[:37] + "…")
+            ax.set_xscale("log")
+            ax.set_yscale("log")
+            ax.grid(True, which="major", alpha=0.3)
+            ax.set_xlabel(xlabel)
+            ax.set_ylabel(label)
+    axes[0][0].set_title("against f-evaluations", fontsize=10)
+    axes[0][1].set_title("against wall time", fontsize=10)
+    name = problem if len(problem) <= 60 else problem[:57] + "…"
+    fig.suptitle(f"{name}: work-precision", fontsize=11, x=0.42, y=0.995)
+    handles, labels = [], []
+    for ax in axes.ravel():
+        for h, lab in zip(*ax.get_legend_handles_labels()):
+            if lab not in labels:
+                handles.append(h)
+                labels.append(lab)
+    if handles:
+        fig.legend(handles, labels, loc="upper right", bbox_to_anchor=(1.0, 0.955), fontsize=7.5,
+                   framealpha=0.9)
+    layout(fig, len(rows), right=0.78 if handles else 0.98)
+    fig.subplots_adjust(top=1 - 0.75 / fig.get_size_inches()[1])
+    file = _save(fig, out_dir, f"{prefix}-work-precision.png")
+    words = ", ".join(label for _, label in rows)
+    cap = (f"Work-precision: {words} against cost (left: f-evaluations, right: wall time), one "
+           "curve per method family (its sweep of h or tolerance); squares: fixed step, circles: "
+           "adaptive, triangles: external engines. Wall times are single runs on the machine of "
+           "the run (not reproducible).")
+    missing = no_nfev(cells)
+    if missing:
+        cap += (" " + ", ".join(missing) + " do not count f-evaluations: they appear on the "
+                "wall-time panels only.")
+    out = [Figure(f"{slug}/{file}", f"{problem}: error against cost", cap)]
+    plt.close("all")
+    return out

@@ -1,0 +1,213 @@
+"""Reports: the site and its Markdown twin from result tables, escaping of every user or file string,
+league tables, method families, the reproduced-figure manifest, the command line."""
+from __future__ import annotations
+
+import json
+import math
+import re
+
+import numpy as np
+import pandas as pd
+import pytest
+from gnibench.reports.families import family_of
+from gnibench.reports.league import cost_to_reach, league
+from gnibench.reports.pages import split_description
+from gnibench.reports.results import load_manifest
+from gnibench.reports.site import build_site
+from gnibench.suite.cli.main import main
+from support_reports import HOSTILE_REASON, make_results, png_bytes
+
+
+@pytest.fixture(scope="module")
+def results(tmp_path_factory):
+    root = tmp_path_factory.mktemp("reports")
+    with pytest.MonkeyPatch.context() as mp:
+        return make_results(root, mp)
+
+
+@pytest.fixture(scope="module")
+def site(results, tmp_path_factory):
+    out = tmp_path_factory.mktemp("site")
+    build_site([results], out, thresholds=(1e-3, 1e-6))
+    return out
+
+
+def test_site_files_and_images(site):
+    for name in ("index.html", "index.md", "hostile.html", "hostile.md"):
+        assert (site / name).is_file(), name
+    html = (site / "hostile.html").read_text()
+    for src in re.findall(r'<img src="([^"]+)"', html):
+        assert (site / src).is_file(), src
+    assert "img/hostile/figure/fig.png" in html                # the reproduced figure
+    md = (site / "hostile.md").read_text()
+    for src in re.findall(r"!\[[^\]]*\]\(([^)]+)\)", md):
+        assert (site / src).is_file(), src
+    assert "Work-precision diagrams" in html and "League tables" in html
+
+
+def test_html_escapes_every_user_string(site):
+    html = (site / "hostile.html").read_text()
+    assert "<script" not in html                                  # the pages have no script
+    assert "<img src=x" not in html and "<b>label</b>" not in html and "<em>markup" not in html
+    assert "&lt;script&gt;alert(&#39;t&#39;)&lt;/script&gt;" in html
+    assert "&lt;img src=x onerror=alert(1)&gt;" in html           # the failed cell's reason
+    assert "Caption &lt;script&gt;x&lt;/script&gt;" in html
+    index = (site / "index.html").read_text()
+    assert "<script" not in index and "&lt;script&gt;" in index
+
+
+def test_markdown_escapes_every_user_string(site):
+    md = (site / "hostile.md").read_text()
+    body = md.split("```")[0]                                     # before the TOML fence
+    headings = [line for line in body.splitlines() if line.startswith("#")]
+    assert all(line.startswith(("# &lt;script", "## ", "### ")) for line in headings), headings
+    assert not any("Fake heading" in h for h in headings)
+    head = md.split("Experiment file (")[0]                       # the TOML text is in a fence
+    for raw in ("<script", "<img", "<b>", "<em>"):
+        assert raw not in head, raw
+    assert "| fake | table |" not in head and "\\|\\-\\-\\-\\|\\-\\-\\-\\|" in head
+    assert "&lt;img src=x onerror=alert\\(1\\)&gt; \\| \\# boom" in md
+    # table rows: every line of a table has as many unescaped | as its header
+    for block in re.findall(r"(\| cell \|.*?)\n\n", md, flags=re.DOTALL):
+        lines = block.splitlines()
+        widths = {len(re.findall(r"(?<!\\)\|", line)) for line in lines}
+        assert len(widths) == 1, lines
+    # the TOML text sits in a fence longer than any backtick run inside it
+    fence = re.search(r"^(`{3,})toml$", md, flags=re.MULTILINE).group(1)
+    assert len(fence) == 5 and md.count(fence) == 2
+
+
+def test_experiment_page_content(site):
+    html = (site / "hostile.html").read_text()
+    assert "(choice)</span> A choice with &lt;em&gt;markup" in html
+    assert "(reading)</span> A reading." in html
+    assert "[HLW] Fig 2.3" in html and "note | # one" in html
+    assert "RuntimeError" in html and "error" in html
+    for package in ("numpy", "numba", "gnibench"):
+        assert f"<td>{package}</td>" in html
+    assert "dopri5" in html and "ε = 1e-03" in html
+
+
+def test_description_split():
+    paragraphs, notes = split_description("a\nb\n\nc\n(choice) one\ncontinued\n(reading) two\n\nd")
+    assert paragraphs == ["a b", "c", "d"]
+    assert notes == [{"kind": "choice", "text": "one continued"}, {"kind": "reading", "text": "two"}]
+
+
+def test_families():
+    assert family_of("dopri5:adaptive=true,rtol=1e-08,atol=1e-08").label == "dopri5"
+    f = family_of("merson:adaptive=true,rtol=1e-05,atol=1e-06")
+    assert (f.label, f.sweep, f.value, f.adaptive) == ("merson:adaptive=true", "rtol", 1e-5, True)
+    assert family_of("heyoka-taylor:dt_out=0.01,tol=1e-10,precision=long double").label == \
+        "heyoka-taylor:precision=long double"
+    f = family_of("rk4:h=0.1+observer:mode=simple,on=H/L,theta=1/1")
+    assert (f.label, f.sweep, f.value) == ("rk4+observer:mode=simple,on=H/L,theta=1/1", "h", 0.1)
+
+
+def test_cost_to_reach():
+    costs, ids = np.array([100.0, 1000.0, 10000.0]), np.array([0, 1, 2])
+    errors = np.array([1e-2, 1e-4, 1e-6])
+    c = cost_to_reach(costs, errors, ids, 1e-5)               # halfway in log between 1e-4 and 1e-6
+    assert c.how == "interpolated" and c.cells == (1, 2) and math.isclose(c.value, 10 ** 3.5)
+    c = cost_to_reach(costs, errors, ids, 1e-1)
+    assert c.how == "bound" and c.value == 100.0 and c.cells == (0,)
+    assert cost_to_reach(costs, errors, ids, 1e-9).how == "not reached"
+    assert cost_to_reach(np.full(3, np.nan), errors, ids, 1e-5).how == "–"
+    # a plateau (round-off) after the first hit does not move the cost
+    c = cost_to_reach(costs, np.array([1e-2, 1e-7, 1e-6]), ids, 1e-5)
+    assert c.cells == (0, 1) and 100 < c.value < 1000
+
+
+def test_league_ranks_ties_and_failures():
+    cells = pd.DataFrame({
+        "cell": range(7), "family": ["a", "a", "b", "b", "c", "d", "d"],
+        "status": ["ok", "ok", "ok", "ok", "nonfinite", "ok", "ok"],
+        "reason": ["", "", "", "", "overflow", "", ""],
+        "nfev": [100.0, 1000, 100, 1000, 50, np.nan, np.nan],
+        "max_global_error": [1e-2, 1e-6, 1e-2, 1e-6, np.inf, 1e-3, 1e-9]})
+    wall = {0: 1e-3, 1: 1e-2, 2: 2e-3, 3: 2e-2, 4: 1e-4, 5: 1e-4, 6: 2e-4}
+    rows = {r.family: r for r in league(cells, wall, 1e-5)}
+    assert rows["a"].rank_nfev == rows["b"].rank_nfev == 1          # a tie shares the rank
+    assert rows["a"].rank_wall == 2 and rows["b"].rank_wall == 3
+    assert rows["d"].rank_nfev is None and rows["d"].rank_wall == 1  # no nfev: wall time only
+    assert rows["c"].nfev.how == "not reached" and rows["c"].failed == [(4, "nonfinite", "overflow")]
+    assert [r.family for r in league(cells, wall, 1e-5)][-1] == "c"
+
+
+def test_manifest_refuses_files_outside(tmp_path):
+    fig = tmp_path / "figure"
+    fig.mkdir()
+    (fig / "a.png").write_bytes(png_bytes())
+    (tmp_path / "secret.png").write_bytes(png_bytes())
+    for files, message in ((["../secret.png"], "outside"), (["/etc/passwd"], "outside"),
+                           (["missing.png"], "does not exist"), (["figure.json"], "not a PNG")):
+        (fig / "figure.json").write_text(json.dumps({"caption": "c", "files": files}))
+        with pytest.raises(ValueError, match=message):
+            load_manifest(fig)
+    (fig / "figure.json").write_text(json.dumps({"caption": "c", "files": ["a.png"], "notes": "n"}))
+    assert load_manifest(fig)["images"] == ["a.png"] and load_manifest(fig)["notes"] == ["n"]
+
+
+def test_bad_manifest_is_reported_on_the_page(results, tmp_path):
+    import shutil
+
+    copy = tmp_path / "copy"
+    shutil.copytree(results, copy)
+    (copy / "figure" / "figure.json").write_text('{"files": ["../../x.png"]}')
+    build_site([copy], tmp_path / "site")
+    html = (tmp_path / "site" / "hostile.html").read_text()
+    assert "figure/figure.json could not be used: file &#39;../../x.png&#39; lies outside" in html
+
+
+def test_cli_report_and_errors(results, tmp_path, capsys):
+    out = tmp_path / "s"
+    assert main(["report", str(results), "-o", str(out), "--accuracy", "1e-2"]) == 0
+    assert "ε = 1e-02" in (out / "hostile.html").read_text()
+    assert main(["report", str(tmp_path / "nothing")]) == 2
+    assert "no results directory" in capsys.readouterr().err
+    assert main(["report", str(results), "-o", str(out), "--accuracy", "x"]) == 2
+    assert "bad --accuracy" in capsys.readouterr().err
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    assert main(["report", str(empty)]) == 2
+    assert "holds no results" in capsys.readouterr().err
+
+
+def test_reason_reaches_the_markdown_table_escaped(site):
+    md = (site / "hostile.md").read_text()
+    assert HOSTILE_REASON not in md
+
+
+def test_run_writes_the_report_unless_told_not(tmp_path, capsys):
+    path = tmp_path / "t.toml"
+    path.write_text('name = "t"\ntitle = "T"\nreference = "r"\nsteps = 5\n'
+                    '[[cells]]\nproblems = ["pendulum"]\nmethods = ["euler"]\nvary.h = [0.1, 0.05]\n')
+    assert main(["run", str(path), "-o", str(tmp_path / "a"), "-j", "1"]) == 0
+    assert (tmp_path / "a" / "report" / "index.html").is_file()
+    assert (tmp_path / "a" / "report" / "t.md").is_file() and (tmp_path / "a" / "summary.md").is_file()
+    assert main(["run", str(path), "-o", str(tmp_path / "b"), "-j", "1", "--no-report"]) == 0
+    assert (tmp_path / "b" / "summary.md").is_file() and not (tmp_path / "b" / "report").exists()
+
+
+def test_tiny_work_precision_with_competitors(tmp_path):
+    """A tiny variant of wp-kepler-2d: adaptive, heyoka and IAS15 sweeps in one run; the engines
+    that count no f-evaluations are drawn against wall time only, and the page says so."""
+    from gnibench.suite.runs.runner import run_experiment
+
+    path = tmp_path / "wp.toml"
+    path.write_text('name = "wp-tiny"\ntitle = "tiny wp"\nreference = "r"\n'
+                    't_end = 6.283185307179586\nevery = 1000\n'
+                    '[[cells]]\nproblems = ["kepler-2d"]\nmethods = ["dop853:atol=1e-14"]\n'
+                    'vary.rtol = [1e-6, 1e-9]\n'
+                    '[[cells]]\nproblems = ["kepler-2d"]\nmethods = ["heyoka-taylor:dt_out=3.14"]\n'
+                    'vary.tol = [1e-9, 1e-15]\n'
+                    '[[cells]]\nproblems = ["kepler-2d"]\nmethods = ["rebound-ias15:dt_out=3.14"]\n'
+                    'vary.epsilon = [1e-4, 1e-9]\n')
+    out = run_experiment(path, tmp_path / "out", jobs=1, log=open("/dev/null", "w"))  # noqa: SIM115
+    build_site([out], tmp_path / "site", thresholds=(1e-6,))
+    html = (tmp_path / "site" / "wp-tiny.html").read_text()
+    assert "heyoka-taylor, rebound-ias15 do not count f-evaluations" in html
+    assert "wp-tiny/00-kepler-2d_e_0.6-work-precision.png" in html
+    rows = re.findall(r"<tr>\s*<td>([^<]*)</td><td><code>([^<]*)</code></td>", html)
+    ranks = {fam: rank for rank, fam in rows}
+    assert ranks["dop853"] == "1" and ranks["heyoka-taylor"] == "–" and ranks["rebound-ias15"] == "–"
