@@ -11,8 +11,8 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from gnibench.reports.plots import Figure, _save, layout, pyplot
 from gnibench.reports.pages import num
+from gnibench.reports.plots import Figure, _save, layout, pyplot
 from gnibench.suite.foundation.benchmarks import load_run, runs
 
 SLOWDOWN = 1.3

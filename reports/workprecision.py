@@ -15,8 +15,8 @@ import math
 from pathlib import Path
 
 import numpy as np
-from gnibench.reports.plots import Figure, _save, layout, pyplot
 from gnibench.reports.palette import styles
+from gnibench.reports.plots import Figure, _save, layout, pyplot
 
 
 def has_sweeps(cells) -> bool:
