@@ -8,6 +8,7 @@ import pandas as pd
 import pytest
 from gnibench.reports.markdown import summary_from_dir
 from gnibench.suite.cli.main import main
+from gnibench.suite.foundation.errors import UserError
 from gnibench.suite.runs.experiment import load_experiment, parse_experiment, shipped, with_options
 from gnibench.suite.runs.storage import read_parquet_meta
 
@@ -162,3 +163,31 @@ def test_unknown_experiment_name_suggests(capsys, tmp_path, monkeypatch):
     assert main(["run", "quik"]) == 2
     assert "did you mean 'quick'" in capsys.readouterr().err
     assert not (tmp_path / "results").exists()
+
+
+def test_section_cells_write_crossings_and_scale_shortens_them(tmp_path):
+    """`section = N` in an experiment: the crossings of the problem's Poincaré section (q1 = 0,
+    p1 > 0 for Hénon–Heiles), each with q1 = 0 to round-off and p1 > 0; `[scale.quick]` shortens
+    N; the section is part of the cell (two cells differing only in it are distinct)."""
+    import pandas as pd
+    from gnibench.suite.runs.experiment import parse_experiment
+    from gnibench.suite.runs.runner import run_experiment
+
+    text = ('name = "sec"\ntitle = "t"\nreference = "r"\nt_end = 2000.0\nsection = 30\n'
+            '[scale.quick]\nsection = 12\n'
+            '[[cells]]\nproblems = ["henon-heiles"]\nmethods = ["dop853:rtol=1e-11,atol=1e-11"]\n'
+            '[[cells]]\nproblems = ["henon-heiles"]\nmethods = ["dop853:rtol=1e-11,atol=1e-11"]\n'
+            'section = 5\n')
+    path = tmp_path / "sec.toml"
+    path.write_text(text)
+    assert [c.section for c in parse_experiment(text, "sec").cells] == [30, 5]
+    out = run_experiment(path, tmp_path / "out", jobs=1, log=open("/dev/null", "w"),  # noqa: SIM115
+                         scale="quick")
+    samples = pd.read_parquet(out / "samples.parquet")
+    assert samples.groupby("cell").size().tolist() == [12, 5]
+    assert (samples["q1"].abs() < 1e-12).all() and (samples["p1"] > 0).all()
+    assert samples["crossing"].tolist() == list(range(1, 13)) + list(range(1, 6))
+    with pytest.raises(UserError, match="section and dt_out"):
+        parse_experiment(text.replace("section = 5\n", "section = 5\ndt_out = 1.0\n"), "sec")
+    with pytest.raises(UserError, match="no Poincaré section"):
+        parse_experiment(text.replace('"henon-heiles"', '"pendulum"'), "sec")

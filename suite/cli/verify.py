@@ -43,7 +43,7 @@ def verify_command(a) -> int:
 def _load(names: list[str], scale: str) -> list:
     from gnibench.suite.runs.experiment import load_experiment
 
-    return [load_experiment(name) for name in names]
+    return [load_experiment(name, scale) for name in names]
 
 
 def _run(experiments, out: Path, a) -> dict[str, Path]:

@@ -63,6 +63,7 @@ def run_cell(cell, report: Callable[[int, float], None] | None = None) -> CellOu
         with np.errstate(all="ignore"):     # overflow in a diverging cell is a status, not noise
             traj = solve(cell.problem_spec, cell.method_spec, steps=cell.steps,
                          t_end=cell.t_end, every=cell.every, dt_out=cell.dt_out,
+                         section=getattr(cell, "section", None),
                          reference=getattr(cell, "reference", None), progress=progress)
             metrics, skipped = apply(traj, parse_metrics(cell.metrics), families=False)
             samples = cell_samples(cell, traj, metrics)

@@ -13,6 +13,8 @@ An experiment is a TOML file, given by path or by the name of one shipped in
     dt_out = 0.5                     # optional: samples at t = k dt_out (every K-th) plus the last
     reference_solution = "heyoka:precision=long double"   # optional: what global_error is
                                      # measured against (exact | heyoka[:...] | rebound[:...] | none)
+    section = 10000                  # optional: the first N crossings of the problem's Poincaré
+                                     # section up to the horizon, instead of samples
 
     [[cells]]                        # a group; the cells are problems x methods x vary values
     label    = "symplectic Euler"    # optional, shown in the summary
@@ -23,6 +25,7 @@ An experiment is a TOML file, given by path or by the name of one shipped in
     metrics = ["precession"]         # optional: replaces the top-level metrics for this group
     dt_out = 0.5                     # optional: replaces the top-level time grid for this group
     reference_solution = "exact"     # optional: replaces the top-level reference for this group
+    section = 10000                  # optional: replaces the top-level section for this group
     vary.h = [0.3, 0.15]             # a base-method option, one cell per value
     vary.problem.p0 = [0.7, 1.4]     # a problem option
     vary.observer.theta = [1, 15]    # an option of a modifier (only methods that have it)
@@ -53,9 +56,9 @@ from gnibench.suite.foundation.errors import UserError, unknown
 from gnibench.suite.foundation.params import format_float
 
 TOP_KEYS = ("name", "title", "reference", "description", "t_end", "steps", "every", "dt_out",
-            "metrics", "reference_solution", "cells", "scale", "figure")
+            "metrics", "reference_solution", "section", "cells", "scale", "figure")
 GROUP_KEYS = ("label", "problems", "methods", "t_end", "steps", "every", "dt_out", "metrics",
-              "reference_solution", "vary", "points", "scale")
+              "reference_solution", "section", "vary", "points", "scale")
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]*$")
 
 
@@ -87,6 +90,7 @@ class Cell:
     metrics: tuple[str, ...] = ()
     dt_out: float | None = None     # time grid (suite/cell/timegrid.py); the specs stay as given
     reference: str | None = None
+    section: int | None = None      # crossings of the problem's Poincaré section (suite/cell/sections.py)
 
 
 @dataclass(frozen=True)
@@ -160,7 +164,7 @@ def parse_experiment(text: str, source: str, scale: str = "paper") -> Experiment
     if not isinstance(groups, list) or not all(isinstance(g, dict) for g in groups) or (
             not groups and "figure" not in doc):
         raise UserError(f"{source}: needs at least one [[cells]] group")
-    defaults = {k: doc[k] for k in ("t_end", "steps", "every", "dt_out") if k in doc}
+    defaults = {k: doc[k] for k in ("t_end", "steps", "every", "dt_out", "section") if k in doc}
     planned = sum(_planned_cells(g, f"{source}: cells[{gi}]") for gi, g in enumerate(groups))
     check_count(planned, f"{source}", "GNIBENCH_MAX_CELLS", "cells")
     defaults["metrics"] = _metrics(doc, source)
@@ -170,7 +174,7 @@ def parse_experiment(text: str, source: str, scale: str = "paper") -> Experiment
         cells.extend(_expand(group, gi, defaults, f"{source}: cells[{gi}]", len(cells)))
     seen: dict[tuple, int] = {}
     for c in cells:
-        key = (c.problem, c.method, c.steps, c.t_end, c.every, c.dt_out, c.reference)
+        key = (c.problem, c.method, c.steps, c.t_end, c.every, c.dt_out, c.reference, c.section)
         if key in seen:
             raise UserError(f"{source}: cell {c.id} ({c.problem} {c.method}) duplicates cell "
                             f"{seen[key]}; allowed: each cell once")
@@ -243,6 +247,12 @@ def _dt_out(group: dict, defaults: dict, where: str) -> float | None:
             math.isfinite(value) and value > 0):
         raise UserError(f"{where}: bad dt_out = {value!r}; allowed: a finite number > 0")
     return float(value)
+
+
+def _section(group: dict, defaults: dict, where: str) -> int | None:
+    """The number of section crossings of a group (its own section replaces the top-level one)."""
+    value = group.get("section", defaults.get("section"))
+    return None if value is None else _integer(value, "section", where)
 
 
 def _integer(value, key: str, where: str) -> int:
@@ -383,6 +393,10 @@ def _expand(group: dict, gi: int, defaults: dict, where: str, first_id: int) -> 
     metrics = _metrics(group, where)
     metrics = (defaults.get("metrics") or ()) if metrics is None else metrics
     dt_out = _dt_out(group, defaults, where)
+    section = _section(group, defaults, where)
+    if section is not None and dt_out is not None:
+        raise UserError(f"{where}: section and dt_out both given; allowed: one of them (a section "
+                        "cell writes its crossings, not samples)")
     reference = _reference_text(group, where)
     reference = defaults.get("reference_solution") if reference is None else reference
     problem_vary, method_vary = _vary(group, where)
@@ -417,13 +431,17 @@ def _expand(group: dict, gi: int, defaults: dict, where: str, first_id: int) -> 
                     effective_dt_out(method, dt_out)      # refuses a conflicting method option
                 h = grid_step(method)
                 nsteps, h_last = grid(h, steps, t_end)
-                check_budgets(problem, method, steps, t_end, every, None, dt_out)
-                ref = _reference(reference, problem)
+                check_budgets(problem, method, steps, t_end, every, section, dt_out)
+                if section is not None and not problem.record.sections:
+                    raise UserError(f"problem {problem.record.id!r} has no Poincaré section; "
+                                    "allowed: a group without section")
+                ref = None if section is not None else _reference(reference, problem)
             except UserError as e:
                 raise UserError(f"{here}: {e}") from None
             cells.append(Cell(first_id + len(cells), gi, label, pspec, mspec, problem.text(),
                               method.text(), h, steps, t_end, every, nsteps,
-                              (nsteps - 1) * h + h_last, metrics, dt_out=dt_out, reference=ref))
+                              (nsteps - 1) * h + h_last, metrics, dt_out=dt_out, reference=ref,
+                              section=section))
     _check_metrics(metrics, parsed_problems, where)
     return cells
 

@@ -4,13 +4,13 @@
 seed's horizons and step sizes. A file may state a shortened ``quick`` scale (and, rarely, change
 the paper one) with overrides::
 
-    [scale.quick]                  # top level: replaces t_end | steps, and every
+    [scale.quick]                  # top level: replaces t_end | steps, every, section
     t_end = 62.8
     every = 10
 
     [[cells]]
     ...
-    [cells.scale.quick]            # one group: t_end | steps, every, vary.<...>, points.<...>
+    [cells.scale.quick]            # one group: t_end | steps, every, section, vary.<...>, points.<...>
     steps = 200
     vary.h = [0.01, 0.005]         # replaces vary.h only (other vary keys stay)
     points.n = 40                  # replaces n of the group's point set
@@ -41,8 +41,8 @@ import numpy as np
 from gnibench.suite.foundation.errors import UserError, unknown
 
 SCALES = ("paper", "quick")
-TOP_SCALE_KEYS = ("t_end", "steps", "every")
-GROUP_SCALE_KEYS = ("t_end", "steps", "every", "vary", "points")
+TOP_SCALE_KEYS = ("t_end", "steps", "every", "section")
+GROUP_SCALE_KEYS = ("t_end", "steps", "every", "section", "vary", "points")
 POINT_KEYS = ("options", "circle", "polygon", "list", "n")
 SHAPES = ("circle", "polygon", "list")
 MAX_POINTS = 10_000

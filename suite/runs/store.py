@@ -72,6 +72,8 @@ def cell_key(cell) -> str:
            "code": code_fingerprint(), "versions": v}
     if getattr(cell, "reference", None) is not None:     # what global_error is measured against
         doc["reference"] = cell.reference
+    if getattr(cell, "section", None) is not None:       # crossings instead of samples
+        doc["section"] = cell.section
     return hashlib.sha256(json.dumps(doc, sort_keys=True, default=str).encode()).hexdigest()[:32]
 
 

@@ -77,7 +77,8 @@ def cell_row(cell, traj=None, metrics=None, status: str = "pending", reason: str
            "method": cell.method, "h": cell.h,
            "t_end": np.nan if cell.t_end is None else cell.t_end,
            "steps_planned": cell.nsteps, "every": cell.every,
-           "dt_out": np.nan if cell.dt_out is None else cell.dt_out, "status": status, "reason": reason,
+           "dt_out": np.nan if cell.dt_out is None else cell.dt_out,
+           "section": getattr(cell, "section", None) or 0, "status": status, "reason": reason,
            "steps": None, "t_final": np.nan, "nfev": np.nan, "njev": np.nan, "samples": None,
            "integrals": "", "reference": getattr(cell, "reference", None) or "",
            "metrics": join_metrics(cell.metrics), "metric_notes": notes,
@@ -127,6 +128,9 @@ def samples_table(parts: list[tuple[pd.DataFrame, tuple[str, ...]]],
     for s in states:
         if s not in df.columns:
             df[s] = pd.Series(float("nan"), index=df.index, dtype="float64")
+    for c in SAMPLE_FRONT:               # section crossings have no steps / nfev columns
+        if c not in df.columns:
+            df[c] = pd.Series(float("nan"), index=df.index, dtype="float64")
     errors = [c for c in df.columns if c.startswith("err_")]
     tail = ["global_error"] if "global_error" in df.columns else []
     rest = [c for c in df.columns if c not in SAMPLE_FRONT and c not in states
@@ -135,7 +139,7 @@ def samples_table(parts: list[tuple[pd.DataFrame, tuple[str, ...]]],
 
 
 _CELL_COLUMNS = ("cell", "group", "label", "problem", "method", "h", "t_end", "steps_planned",
-                 "every", "dt_out", "status", "reason", "steps", "t_final", "nfev", "njev", "samples",
+                 "every", "dt_out", "section", "status", "reason", "steps", "t_final", "nfev", "njev", "samples",
                  "integrals", "reference", "metrics", "metric_notes")
 
 
