@@ -188,3 +188,19 @@ def test_sampling_helpers():
     assert sampling_needs(ETA, parse_problem("pendulum")) == {}
     T = 2 * math.pi
     assert steps_per_period(T / 100, T) == 100 and steps_per_period(0.1, T) is None
+
+
+def test_eta_sets_the_period_grid_in_experiments_and_solve():
+    """A group with eta and no dt_out samples at t = nT: adaptive and engine cells get dt_out = T;
+    a fixed-step cell whose `every` steps make whole periods keeps its own grid; an explicit
+    dt_out is kept."""
+    from gnibench.suite.runs.experiment import parse_experiment
+
+    head = 'name = "e"\ntitle = "t"\nreference = "[B] §5.2"\nt_end = 3.0\nmetrics = ["eta"]\n'
+    cells = parse_experiment(head + '[[cells]]\nproblems = ["kepler-3d"]\n'
+                             'methods = ["dopri5:rtol=1e-8,atol=1e-8", "rk4:h=0.01"]\nevery = 100\n'
+                             '[[cells]]\nproblems = ["kepler-3d"]\nmethods = ["rk4:h=0.01"]\n'
+                             'every = 7\n[[cells]]\nproblems = ["kepler-3d"]\n'
+                             'methods = ["dopri5:rtol=1e-8,atol=1e-8"]\ndt_out = 0.5\n', "e").cells
+    assert [c.dt_out for c in cells] == [pytest.approx(1.0, rel=1e-14), None,
+                                         pytest.approx(1.0, rel=1e-14), 0.5]

@@ -174,6 +174,11 @@ def _solve(a) -> int:
         if a.dt_out is not None:
             raise UserError("--dt-out does not apply with --section (the section points are "
                             "written)")
+    if a.section is None and a.metrics:           # eta: samples at whole periods t = nT
+        from gnibench.suite.cell.spec import prepare
+        from gnibench.suite.metrics.compute import period_grid
+
+        a.dt_out = period_grid(choices, *prepare(a.problem, a.method), a.every, a.dt_out)
     progress = SolveProgress(f"{a.problem} {a.method}")
     interrupted = None
     try:

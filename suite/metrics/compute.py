@@ -114,3 +114,27 @@ def steps_per_period(h: float, period: float, rtol: float = 1e-9) -> int | None:
     a fixed-step cell at every whole period."""
     n = round(period / h)
     return n if n >= 1 and abs(n * h - period) <= rtol * period else None
+
+
+def period_grid(choices, problem, method, every: int = 1, dt_out: float | None = None):
+    """The time grid a cell runs on, given its chosen metrics: ``dt_out`` when one is given;
+    else the period T when a metric needs samples at whole periods (η(nT), [B] §5.2) and the
+    cell's own samples do not fall on them (a fixed-step method whose ``every`` steps make a
+    whole number of periods keeps its grid); else None. ``gnibench solve --metrics eta`` and an
+    experiment group with ``eta`` and no ``dt_out`` both sample at t = nT this way."""
+    from gnibench.suite.cell.grid import grid_step
+
+    if dt_out is not None:
+        return dt_out
+    needs = sampling_needs(choices, problem)
+    if not needs:
+        return None
+    period = needs["dt_out"]
+    v = method.base.values
+    external = getattr(method.base.record, "run", None) is not None
+    transformed = problem.record.transformed(problem.values) is not None
+    if not (v.get("adaptive") or external or transformed):
+        n = steps_per_period(grid_step(method), period)
+        if n is not None and every % n == 0:
+            return None
+    return period

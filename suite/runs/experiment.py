@@ -384,6 +384,7 @@ def _expand(group: dict, gi: int, defaults: dict, where: str, first_id: int) -> 
     from gnibench.suite.cell.grid import grid, grid_step
     from gnibench.suite.cell.spec import prepare
     from gnibench.suite.cell.timegrid import effective_dt_out, engine_method
+    from gnibench.suite.metrics.compute import parse_metrics, period_grid
 
     _keys(group, GROUP_KEYS, where)
     label = _text(group, "label", where, one_line=True)
@@ -400,6 +401,7 @@ def _expand(group: dict, gi: int, defaults: dict, where: str, first_id: int) -> 
     reference = _reference_text(group, where)
     reference = defaults.get("reference_solution") if reference is None else reference
     problem_vary, method_vary = _vary(group, where)
+    metric_choices = parse_metrics(list(metrics))
     points = [{}]
     if "points" in group:
         from gnibench.suite.runs.scales import point_options
@@ -425,13 +427,15 @@ def _expand(group: dict, gi: int, defaults: dict, where: str, first_id: int) -> 
                 problem, method = prepare(pspec, mspec)
                 parsed_problems.append(problem)
                 external = getattr(method.base.record, "run", None) is not None
-                if dt_out is not None and external:     # an engine's dt_out is its own grid
-                    method = engine_method(method, dt_out, problem)
-                elif dt_out is not None:
-                    effective_dt_out(method, dt_out)      # refuses a conflicting method option
+                cell_dt_out = dt_out if section is not None else period_grid(
+                    metric_choices, problem, method, every, dt_out)   # eta: samples at t = nT
+                if cell_dt_out is not None and external:  # an engine's dt_out is its own grid
+                    method = engine_method(method, cell_dt_out, problem)
+                elif cell_dt_out is not None:
+                    effective_dt_out(method, cell_dt_out)  # refuses a conflicting method option
                 h = grid_step(method)
                 nsteps, h_last = grid(h, steps, t_end)
-                check_budgets(problem, method, steps, t_end, every, section, dt_out)
+                check_budgets(problem, method, steps, t_end, every, section, cell_dt_out)
                 if section is not None and not problem.record.sections:
                     raise UserError(f"problem {problem.record.id!r} has no Poincaré section; "
                                     "allowed: a group without section")
@@ -440,7 +444,7 @@ def _expand(group: dict, gi: int, defaults: dict, where: str, first_id: int) -> 
                 raise UserError(f"{here}: {e}") from None
             cells.append(Cell(first_id + len(cells), gi, label, pspec, mspec, problem.text(),
                               method.text(), h, steps, t_end, every, nsteps,
-                              (nsteps - 1) * h + h_last, metrics, dt_out=dt_out, reference=ref,
+                              (nsteps - 1) * h + h_last, metrics, dt_out=cell_dt_out, reference=ref,
                               section=section))
     _check_metrics(metrics, parsed_problems, where)
     return cells
