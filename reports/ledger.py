@@ -60,3 +60,27 @@ def render_ledger(table: pd.DataFrame, meta: dict) -> str:
                          f"{escape(r.threshold)} | {figure} |")
         lines.append("")
     return "\n".join(lines)
+
+
+def ledger_context(table: pd.DataFrame, meta: dict, pages: set[str]) -> dict:
+    """What the HTML ledger page shows: counts, and per section of the seeds the claims with
+    verdict, measured and seed values, threshold, reading, and a link to the figure's page when
+    the site holds it (``pages``: the experiment slugs of the site)."""
+    counts = table["verdict"].value_counts()
+    sections = []
+    for name, part in table.groupby(table["id"].map(section), sort=False):
+        rows = []
+        for r in part.itertuples():
+            measured = str(r.measured_text)
+            extra = [str(x) for x in (r.detail, r.sweep) if x]
+            rows.append({"id": r.id, "citation": r.citation, "claim": r.claim,
+                         "reading": r.reading or "", "verdict": r.verdict,
+                         "expected": r.expected, "unexpected": bool(r.unexpected),
+                         "measured": measured, "extra": extra, "seed": r.seed_value,
+                         "threshold": r.threshold, "figure": r.figure or "",
+                         "figure_href": f"{r.figure}.html" if r.figure in pages else ""})
+        sections.append({"name": name, "rows": rows})
+    return {"scale": meta.get("scale", ""), "total": len(table),
+            "counts": [(v, int(counts.get(v, 0))) for v in VERDICT_ORDER],
+            "unexpected": [str(i) for i in table.loc[table["unexpected"], "id"]],
+            "sections": sections}

@@ -89,16 +89,16 @@ def _unique(name: str, taken: set[str]) -> str:
     return out
 
 
-def ledger_page(ledger, name: str) -> dict:
-    """A claims ledger as a plain table (every column as it is in ledger.parquet)."""
-    from gnibench.reports.pages import num
+def ledger_page(ledger, name: str, pages: set[str]) -> dict:
+    """A claims ledger (gnibench verify): per section of the seeds, each claim with its verdict,
+    the measured number beside the seed's and a link to its figure's page when the site has it."""
+    from gnibench.reports.ledger import ledger_context, render_ledger
 
-    df = ledger.table
-    rows = [[num(v) if isinstance(v, float) else str(v) for v in r]
-            for r in df.itertuples(index=False)]
+    meta = ledger.meta or {}
     return {"title": f"Claims ledger ({ledger.dir.name})", "name": name,
-            "paragraphs": [f"{len(df)} claims, from {ledger.dir / 'ledger.parquet'}."],
-            "figures": [], "header": [str(c) for c in df.columns], "rows": rows, "code": []}
+            "source": str(ledger.dir / "ledger.parquet"),
+            "markdown": render_ledger(ledger.table, meta),
+            **ledger_context(ledger.table, meta, pages)}
 
 
 def build_site(dirs: list[Path], site: Path, thresholds=DEFAULT_THRESHOLDS,
@@ -127,17 +127,22 @@ def build_site(dirs: list[Path], site: Path, thresholds=DEFAULT_THRESHOLDS,
         _copy_figure(res, img_dir)
         if log is not None:
             print(f"gnibench: report: {res.name} ({len(res.cells)} cells)", file=log, flush=True)
-    ledger_pages = [ledger_page(lg, _unique(f"ledger-{lg.dir.name}", taken)) for lg in ledgers]
+    slugs = {p["slug"] for p in pages}
+    ledger_pages = [ledger_page(lg, _unique(f"ledger-{lg.dir.name}", taken), slugs)
+                    for lg in ledgers]
     timing = timing_page(benchmarks, img / "timing", "timing") if benchmarks else None
     common = {"nav": [{"slug": p["slug"], "name": p["name"]} for p in pages],
               "has_timing": timing is not None,
-              "ledgers": [{"slug": lp["name"], "name": lp["title"], "rows": lp["rows"]}
-                          for lp in ledger_pages],
+              "ledgers": [{"slug": lp["name"], "name": lp["title"], "total": lp["total"],
+                           "counts": lp["counts"]} for lp in ledger_pages],
               "generated": time.strftime("%Y-%m-%d %H:%M")}
     for p in pages:
         _write(site / f"{p['slug']}.html", html.get_template("experiment.html").render(p=p, **common))
         _write(site / f"{p['slug']}.md", md.get_template("experiment.md").render(p=p, **common))
-    for t, name in [(lp, lp["name"]) for lp in ledger_pages] + ([(timing, "timing")] if timing else []):
+    for lp in ledger_pages:
+        _write(site / f"{lp['name']}.html", html.get_template("ledger.html").render(t=lp, **common))
+        _write(site / f"{lp['name']}.md", lp["markdown"] + "\n")
+    for t, name in [(timing, "timing")] if timing else []:
         _write(site / f"{name}.html", html.get_template("table.html").render(t=t, **common))
         _write(site / f"{name}.md", md.get_template("table.md").render(t=t, **common))
     entries = [index_entry(p) for p in pages]

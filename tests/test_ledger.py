@@ -158,6 +158,9 @@ def test_verify_a_few_claims(tmp_path, capsys):
     assert abs(rows["B-3-b"]["measured"] - math.exp(0.69)) < 1e-12
     table = pd.read_parquet(out / "ledger.parquet")
     assert len(table) == 3 and (out / "ledger.md").is_file()
+    page = (out / "report" / "ledger-v.html").read_text()     # the report site, by default
+    assert '<tr id="B-3-b">' in page and 'class="badge verdict not-reproduced">not reproduced' in page
+    assert "1 not reproduced" in (out / "report" / "index.html").read_text()
 
 
 def test_an_unexpected_verdict_sets_the_exit_code(tmp_path, capsys, monkeypatch):

@@ -124,6 +124,8 @@ def _parser() -> argparse.ArgumentParser:
     v.add_argument("-j", "--jobs", type=int, default=None, metavar="N")
     v.add_argument("--executor", default="local", metavar="local|dask")
     v.add_argument("--scheduler", metavar="ADDRESS")
+    v.add_argument("--no-report", action="store_true",
+                   help="do not write the report site (DIR/report/index.html)")
     r.add_argument("--no-report", action="store_true",
                    help="do not write the report (DIR/report/index.html); summary.md is written")
 

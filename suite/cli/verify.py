@@ -81,6 +81,11 @@ def _judge(claims, dirs, out: Path, a) -> int:
             measured = v.row()["measured_text"]
             print(f"{v.id:<24} {v.verdict:<15} measured {measured or '-':<14} seed: "
                   f"{v.seed_value or '-'}{'  [' + v.figure + ']' if v.figure else ''}{flag}")
+    if not getattr(a, "no_report", False):
+        from gnibench.reports.site import build_site
+
+        index = build_site([out], out / "report")
+        print(f"gnibench: verify: report {index}", file=sys.stderr)
     unexpected = [v.id for v in verdicts if v.unexpected]
     counts = {k: sum(v.verdict == k for v in verdicts) for k in
               ("reproduced", "partly", "not reproduced", "not checkable")}
