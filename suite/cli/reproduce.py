@@ -30,6 +30,8 @@ def add_parser(sub, path_type) -> None:
     r.add_argument("--fresh", action="store_true", help="ignore the cells stored in DIR")
     r.add_argument("--redraw", action="store_true",
                    help="draw again from the tables in DIR, without integrating")
+    r.add_argument("--no-report", action="store_true",
+                   help="do not write the report site (DIR/report/index.html)")
     r.add_argument("--list", action="store_true",
                    help="list the figures, their scales and cost (cells and steps per scale)")
 
@@ -66,6 +68,11 @@ def run(a) -> int:
                                scheduler=a.scheduler, fresh=a.fresh, summarize=render_summary)
         figures = [e.figure for e in experiments]
     draw_all(dirs, figures)
+    if not a.no_report:                 # the figures beside their runs, as a site
+        from gnibench.reports.site import build_site
+
+        index = build_site(dirs, out / "report")
+        print(f"gnibench: reproduce: report {index}", file=sys.stderr)
     return 0
 
 
