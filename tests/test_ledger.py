@@ -29,14 +29,31 @@ def test_every_shipped_claim_validates_and_checks_exist():
             assert c.closed_form in closed_forms.CLOSED_FORMS, c.id
 
 
-def test_ledger_ids_are_those_of_the_inventory():
-    """Every ledger id is a claim of CLAIMS.md (when the inventory is at hand)."""
+def _inventory() -> list[str]:
+    from importlib import resources
+
+    text = (resources.files("gnibench.suite") / "claims" / "inventory.txt").read_text()
+    return [line for line in text.splitlines() if line and not line.startswith("#")]
+
+
+def test_the_ledger_covers_the_inventory_exactly():
+    """One entry per claim of CLAIMS.md (132), no more, no less."""
+    inventory, ledger = _inventory(), load_ledger()
+    assert len(inventory) == len(set(inventory)) == 132
+    missing = [i for i in inventory if i not in ledger]
+    extra = [i for i in ledger if i not in inventory]
+    assert not missing and not extra, f"missing {missing}, not in the inventory {extra}"
+
+
+def test_the_inventory_is_that_of_claims_md():
+    """suite/claims/inventory.txt is still CLAIMS.md's list (when CLAIMS.md is at hand)."""
     if not CLAIMS_MD.is_file():
         pytest.skip("CLAIMS.md is not beside the repository")
-    inventory = set(re.findall(r"\*\*((?:B|HLW)-[A-Za-z0-9.\-]+)\*\*", CLAIMS_MD.read_text()))
-    inventory |= set(re.findall(r"^\| (HLW-2\.1-table-[A-Z]+-[A-Z]+) \|", CLAIMS_MD.read_text(),
-                                re.MULTILINE))
-    assert set(load_ledger()) <= inventory
+    text = CLAIMS_MD.read_text()
+    found = list(dict.fromkeys(re.findall(r"\*\*((?:B|HLW)-[A-Za-z0-9.\-]+)\*\*", text)
+                               + re.findall(r"^\| (HLW-2\.1-table-[A-Z]+-[A-Z]+) \|", text,
+                                            re.MULTILINE)))
+    assert found == _inventory()
 
 
 @pytest.mark.parametrize("text,ok", [
