@@ -95,6 +95,12 @@ def _draw_panel(ax, results, source: dict, source_index: int, panel: dict) -> di
                       else "box")
     if panel["legend"] not in ("none", "outside") and ax.get_legend_handles_labels()[0]:
         ax.legend(loc=panel["legend"])
+    # what the axes really carry (read back from matplotlib, for the manifest and the tests)
+    entry.update(xlabel=ax.get_xlabel(), ylabel=ax.get_ylabel(), xscale=ax.get_xscale(),
+                 yscale=ax.get_yscale(), title=ax.get_title(),
+                 drawn=int(sum(len(line.get_xdata()) for line in ax.get_lines())
+                           + sum(len(c.get_offsets()) for c in ax.collections
+                                 if hasattr(c, "get_offsets"))))
     return entry
 
 
