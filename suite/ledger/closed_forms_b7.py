@@ -63,7 +63,7 @@ def so4_plateau(cells, samples) -> dict:
         late = t >= t[-1] / 2
         for name in _integrals(rows):
             e = rows[f"err_{name}"].to_numpy(dtype=float)[late]
-            s, m = np.polyfit(t[late], e, 1)
+            s = np.polyfit(t[late], e, 1)[0]
             mean, std = float(np.mean(e)), float(np.std(e))
             d = abs(s) * (t[-1] / 2) / abs(mean) if mean else math.inf
             r = abs(mean) / std if std else math.inf
