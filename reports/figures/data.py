@@ -86,8 +86,15 @@ def _sample_columns(figure: dict) -> list[str]:
     cols = {"cell", "t"}
     for panel in figure.get("panels", []):
         for curve in panel.get("curves", []):
-            cols.update((curve["x"], curve["y"]))
+            cols.update((curve["x"], curve["y"], *curve.get("where", {})))
     return sorted(cols) if figure.get("panels") else []
+
+
+def where(df: pd.DataFrame, conditions: dict | None) -> pd.DataFrame:
+    """The samples of a curve's ``where = {column = value}`` (all of them without one)."""
+    for column, value in (conditions or {}).items():
+        df = df[df[column].to_numpy(dtype=float) == value]
+    return df
 
 
 def is_signed(column: str) -> bool:

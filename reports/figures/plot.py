@@ -19,6 +19,7 @@ from gnibench.reports.figures.data import (
     polygon_area,
     thin,
     values,
+    where,
     wrap,
 )
 from gnibench.reports.figures.style import FIELD_COLOR, QUIVER_COLOR, curve_color
@@ -26,7 +27,10 @@ from gnibench.reports.figures.style import FIELD_COLOR, QUIVER_COLOR, curve_colo
 LINE = {"line": {"linestyle": "-", "marker": None},
         "dots": {"linestyle": "none", "marker": ".", "markersize": 2.0},
         "points": {"linestyle": "none", "marker": "o", "markersize": 2.2},
-        "markers": {"linestyle": "-", "linewidth": 0.6, "marker": "o", "markersize": 2.4}}
+        "markers": {"linestyle": "-", "linewidth": 0.6, "marker": "o", "markersize": 2.4},
+        "pixels": {"linestyle": "none", "marker": ".", "markersize": 0.6, "markeredgewidth": 0}}
+#: styles of unconnected points: never thinned (the density of a section trace is the picture)
+POINT_CLOUDS = ("dots", "points", "pixels")
 
 
 def figure_size(figure: dict) -> tuple[float, float]:
@@ -111,6 +115,8 @@ def _draw_curve(ax, results, curve: dict, logx: bool, logy: bool) -> dict:
     out = {"label": label, "cells": curve["cells"], "x": curve["x"], "y": curve["y"],
            "style": curve["style"], "color": color, "points": 0, "samples": 0,
            "statuses": sorted({str(r.get("status")) for r in rows}), "missing": []}
+    if curve.get("where"):
+        out["where"] = curve["where"]
     if curve.get("at") is not None:
         return _draw_sets(ax, results, curve, out, logx, logy)
     style = LINE[curve["style"] if curve["style"] in LINE else "line"]
@@ -120,11 +126,13 @@ def _draw_curve(ax, results, curve: dict, logx: bool, logy: bool) -> dict:
         if not len(df):
             out["missing"].append(cell)
             continue
+        df = where(df, curve.get("where"))
         x, y = values(df, curve["x"], logx), values(df, curve["y"], logy)
         out["samples"] += len(df)
         ok = np.isfinite(x) & np.isfinite(y)
         out["points"] += int(ok.sum())
-        x, y = thin(x, y, logx=logx)
+        if curve["style"] not in POINT_CLOUDS:      # a cloud of points is drawn whole
+            x, y = thin(x, y, logx=logx)
         if curve.get("xwrap") or curve.get("ywrap"):
             x, y = wrap(x, y, curve.get("xwrap"), curve.get("ywrap"))
         style = {"linewidth": curve.get("linewidth", 1.2), **style}
@@ -142,7 +150,7 @@ def _draw_curve(ax, results, curve: dict, logx: bool, logy: bool) -> dict:
 def _draw_sets(ax, results, curve: dict, out: dict, logx: bool, logy: bool) -> dict:
     """The images of a point set: one shape per time of ``at`` (a closed polygon, or points)."""
     color = curve_color(curve)
-    frames = [results.cell_samples(c) for c in curve["cells"]]
+    frames = [where(results.cell_samples(c), curve.get("where")) for c in curve["cells"]]
     out["shapes"] = []
     for n, t in enumerate(curve["at"]):
         xs, ys = [], []

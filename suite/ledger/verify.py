@@ -33,7 +33,7 @@ def select_claims(ids: list[str]) -> list[Claim]:
         if i in seen:
             continue
         seen.add(i)
-        todo.extend(ledger[i].all_of)
+        todo.extend(p for p in ledger[i].all_of if p in ledger)   # missing: not checkable
     return [c for c in ledger.values() if c.id in seen]
 
 
@@ -50,11 +50,16 @@ def judge(claims: list[Claim], results: Results, scale: str) -> list[Verdict]:
     """Verdicts in ledger order; aggregates after their parts."""
     done: dict[str, Verdict] = {}
     pending = list(claims)
+    known = set(load_ledger())
     while pending:
         rest = []
         for c in pending:
-            if all(p in done for p in c.all_of):
+            if all(p in done or p not in known for p in c.all_of):
                 done[c.id] = evaluate(c, results, done, scale)
+                missing = [p for p in c.all_of if p not in known]
+                if missing:
+                    done[c.id].detail = (f"not in the ledger: {', '.join(missing)}"
+                                         + (f"; {done[c.id].detail}" if done[c.id].detail else ""))
             else:
                 rest.append(c)
         if len(rest) == len(pending):

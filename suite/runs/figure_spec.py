@@ -30,12 +30,15 @@ the drawing (:mod:`gnibench.reports.figures`) reads only the results directory. 
     cells = { group = 1 }          # group (int or list), index (within the groups), cell (ids)
     label = "p0 = 0.7, 1.4, 2.1 (h = {=h})"  # legend ("" or none: no entry); {=column:fmt} =
                                    # a cells.parquet value (median over the curve's cells)
-    style = "line"                 # line | dots | points | markers | polygon
+    style = "line"                 # line | dots | points | markers | polygon | pixels (tiny
+                                   # dots for dense clouds); dots, points, pixels are not thinned
     at = [0, 1.3, 2.6]             # polygon / points: the sample times drawn (one shape each)
     color = "exact"                # a palette key (default: the cell's method)
     start = "J"                    # text at the first point of the curve
     xwrap = [-3.14159, 3.14159]    # x taken modulo the interval (an angle on the circle)
     linewidth = 0.5                # points (default 1.2)
+    where = { chart = 1 }          # only the samples whose columns have these values (e.g. the
+                                   # section points in chart Γ1 of euler-so4, [B] Fig 26)
 
     [[figure.panels.fields]]       # a function of the problem record on a grid (no integration)
     problem = "henon-heiles"       # PROBLEM spec
@@ -68,16 +71,18 @@ FIGURE_KEYS = ("number", "caption", "kind", "layout", "size", "note", "panels", 
 PANEL_KEYS = ("title", "x", "y", "xlabel", "ylabel", "xscale", "yscale", "xlim", "ylim", "aspect",
               "legend", "zoom", "note", "curves", "fields")
 CURVE_KEYS = ("cells", "label", "x", "y", "style", "at", "color", "start", "xwrap", "ywrap",
-              "linewidth")
+              "linewidth", "where")
 SELECT_KEYS = ("group", "index", "cell")
 TABLE_KEYS = ("columns", "rows", "zero_below")
 ROW_KEYS = ("label", "cells", "book")
 KINDS = ("plot", "table")
 SCALES = ("linear", "log")
-STYLES = ("line", "dots", "points", "markers", "polygon")
+STYLES = ("line", "dots", "points", "markers", "polygon", "pixels")
 LEGENDS = ("best", "upper left", "upper right", "lower left", "lower right", "center left",
            "center right", "upper center", "lower center", "outside", "none")
 FIXED_COLUMNS = ("t", "steps", "nfev")
+#: columns of the samples of a section cell (``section = N``) besides the states
+SECTION_COLUMNS = ("crossing", "chart")
 #: columns that may be negative: a log axis plots their absolute value
 _SIGNED = re.compile(r"^(err_|relerr_|eta_phase$|pericenter_angle$)")
 
@@ -256,6 +261,7 @@ def _curve(curve, cells, x: str, y: str, where: str) -> dict:
             why = column_problem(out[axis], c)
             if why:
                 raise UserError(f"{where}: {axis} = {out[axis]!r}: {why}")
+    out["where"] = _where(curve.get("where", {}), chosen, where)
     _check_label(out["label"], chosen, where)
     if "at" in curve:
         at = curve["at"]
@@ -270,6 +276,21 @@ def _curve(curve, cells, x: str, y: str, where: str) -> dict:
                                     f"t = {c.t_final:.6g})")
     elif out["style"] == "polygon":
         raise UserError(f"{where}: style polygon needs at = [times] (one polygon per time)")
+    return out
+
+
+def _where(value, chosen, where: str) -> dict:
+    """``where = {column = number, ...}``: the samples kept (columns of every chosen cell)."""
+    if not isinstance(value, dict):
+        raise UserError(f"{where}: bad where = {value!r}; allowed: a table {{column = number}}")
+    out = {}
+    for column, v in value.items():
+        why = column_problem(column, next(iter(chosen))) if chosen else ""
+        for c in chosen:
+            why = why or column_problem(column, c)
+        if why:
+            raise UserError(f"{where}: where {column!r}: {why}")
+        out[column] = _number(v, f"{where}: where {column}")
     return out
 
 
@@ -292,6 +313,16 @@ def _problem_facts(problem_text: str) -> tuple[tuple[str, ...], tuple[str, ...],
     return problem.record.state, integral_names(problem), problem.record.exact is not None
 
 
+@functools.lru_cache(maxsize=256)
+def _charts(problem_text: str) -> tuple[str, ...]:
+    """'1', ..., 'k' for the charts Γ1..Γk of a multi-chart section (euler-so4); () otherwise."""
+    from gnibench.suite.cell.spec import parse_problem
+
+    record = parse_problem(problem_text).record
+    k = next((s.charts for s in record.sections if s.chart is not None), 0)
+    return tuple(str(i) for i in range(1, k + 1))
+
+
 def _metric_columns(cell) -> tuple[set[str], set[str]]:
     """(sample columns, per-cell columns) the chosen metrics of a cell write."""
     from gnibench.suite.metrics.compute import parse_metrics, selected
@@ -303,7 +334,7 @@ def _metric_columns(cell) -> tuple[set[str], set[str]]:
         of = choice.values.get("of") or errors
         for names, out in ((choice.metric.columns, columns), (choice.metric.scalars, scalars)):
             for template, _ in names:
-                subs = {"<I>": integrals, "<X>": of}
+                subs = {"<I>": integrals, "<X>": of, "<k>": _charts(cell.problem)}
                 key = next((k for k in subs if k in template), None)
                 out.update([template.replace(key, v) for v in subs[key]] if key else [template])
     if not exact:
@@ -315,6 +346,8 @@ def column_problem(column: str, cell) -> str:
     """Why ``column`` is not in the samples of ``cell`` ("" when it is)."""
     states, _, exact = _problem_facts(cell.problem)
     if column in FIXED_COLUMNS or column in states:
+        return ""
+    if getattr(cell, "section", None) is not None and column in SECTION_COLUMNS:
         return ""
     columns, _ = _metric_columns(cell)
     if column in columns:
