@@ -29,6 +29,7 @@ import math
 
 import numpy as np
 from gnibench.suite.ledger import closed_forms_b7
+from gnibench.suite.ledger.closed_forms_b6 import gs_section_trace
 
 #: integrals of the oscillator problems as combinations of the per-oscillator energies E_k
 _ENERGIES = {"harmonic-oscillator": {"states": (("q", "p"),), "H": (1.0,)},
@@ -197,6 +198,7 @@ CLOSED_FORMS = {
     "euler_oscillator_energy": euler_oscillator_energy,
     "euler_observer_limit": euler_observer_limit,
     "main_lemma_decay": main_lemma_decay,
+    "gs_section_trace": gs_section_trace,          # [B] §6.2 (closed_forms_b6.py)
 }
 CLOSED_FORMS.update(closed_forms_b7.CLOSED_FORMS)       # [B] §7.2 section statistics
 

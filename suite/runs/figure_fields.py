@@ -7,11 +7,17 @@ field ([HLW] Fig 1.1, first picture). :func:`parse_field` validates one
 :func:`field_table` evaluates all the fields of a normalized figure into one long table,
 ``fields.parquet`` beside ``samples.parquet``, so the drawing reads tables only.
 
+A ``fixed`` state is a number, or an expression in the two axis states (numbers, the axis names,
++ − * / **, parentheses), evaluated on the grid: a state on a chart of the plane rather than
+constant, e.g. [B] Fig 15(b)'s level sets of H_R at I = K = 0.1 drawn through (6.2) at φ = π/2,
+``x = "p2"`` (r), ``y = "q2"`` (−P), ``fixed = { p1 = 0, q1 = "0.1 / p2" }`` (q1 = I/r).
+
 The function is evaluated by the problem's own compiled module (the integrals, ``eval_invariants``;
 the vector field ``base_f``): the same code the cells use.
 """
 from __future__ import annotations
 
+import ast
 import math
 
 import numpy as np
@@ -63,7 +69,8 @@ def parse_field(field, where: str) -> dict:
         if name not in rec.state or name in (x, y):
             others = [s for s in rec.state if s not in (x, y)]
             raise UserError(f"{where}: fixed: {unknown('state', name, others)}")
-        y0[name] = _number(value, f"{where}: fixed.{name}")
+        y0[name] = (_expression(value, (x, y), f"{where}: fixed.{name}") if isinstance(value, str)
+                    else _number(value, f"{where}: fixed.{name}"))
     out = {"problem": problem.text(), "function": function, "kind": kind, "x": x, "y": y,
            "fixed": {s: v for s, v in y0.items() if s not in (x, y)},
            "xrange": _range(field, "xrange", where), "yrange": _range(field, "yrange", where),
@@ -87,6 +94,46 @@ def _line(value, where: str) -> str:
     if not isinstance(value, str) or not value.isprintable():
         raise UserError(f"{where}: bad value {value!r}; allowed: one line of text")
     return value
+
+
+_EXPR_NODES = (ast.Expression, ast.BinOp, ast.UnaryOp, ast.Constant, ast.Name, ast.Load,
+               ast.Add, ast.Sub, ast.Mult, ast.Div, ast.Pow, ast.USub, ast.UAdd)
+
+
+def _expression(text: str, axes: tuple, where: str) -> str:
+    """A fixed state given as an expression in the axis states (checked; kept as text)."""
+    try:
+        tree = ast.parse(text, mode="eval")
+    except SyntaxError:
+        tree = None
+    ok = tree is not None and all(
+        isinstance(n, _EXPR_NODES)
+        and (not isinstance(n, ast.Constant) or type(n.value) in (int, float))
+        and (not isinstance(n, ast.Name) or n.id in axes) for n in ast.walk(tree))
+    if not ok:
+        raise UserError(f"{where}: bad expression {text!r}; allowed: numbers, the axis states "
+                        f"{axes[0]} and {axes[1]}, + - * / ** and parentheses")
+    return text
+
+
+def _grid_value(value, names: dict) -> np.ndarray | float:
+    """A fixed state on the grid: its number, or its expression at the grid's axis values."""
+    if not isinstance(value, str):
+        return value
+    ops = {ast.Add: np.add, ast.Sub: np.subtract, ast.Mult: np.multiply, ast.Div: np.divide,
+           ast.Pow: np.power}
+
+    def ev(node):
+        if isinstance(node, ast.Constant):
+            return float(node.value)
+        if isinstance(node, ast.Name):
+            return names[node.id]
+        if isinstance(node, ast.UnaryOp):
+            return -ev(node.operand) if isinstance(node.op, ast.USub) else ev(node.operand)
+        return ops[type(node.op)](ev(node.left), ev(node.right))
+
+    with np.errstate(all="ignore"):
+        return ev(ast.parse(value, mode="eval").body)
 
 
 def _range(field: dict, key: str, where: str) -> list[float]:
@@ -129,9 +176,9 @@ def _states(field: dict, xs: np.ndarray, ys: np.ndarray) -> tuple[object, np.nda
     problem = parse_problem(field["problem"])
     rec = problem.record
     states = np.empty((len(xs), rec.dim))
+    axes = {field["x"]: xs, field["y"]: ys}
     for j, name in enumerate(rec.state):
-        states[:, j] = xs if name == field["x"] else ys if name == field["y"] else \
-            field["fixed"][name]
+        states[:, j] = axes[name] if name in axes else _grid_value(field["fixed"][name], axes)
     return problem, states
 
 

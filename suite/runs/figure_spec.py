@@ -46,7 +46,7 @@ the drawing (:mod:`gnibench.reports.figures`) reads only the results directory. 
     kind = "contour"               # contour | quiver
     x = "q1"                       # state on each axis; fixed = the other states (default y0)
     y = "q2"
-    fixed = { p1 = 0.0, p2 = 0.0 }
+    fixed = { p1 = 0.0, p2 = 0.0 } # or an expression of the axis states: { q1 = "0.1 / p2" }
     xrange = [-1, 1]
     yrange = [-1, 1]
     n = 200                        # grid points per axis

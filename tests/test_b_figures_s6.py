@@ -1,0 +1,68 @@
+"""[B] §6, the Gavrilov–Shil'nikov system: Figs 15-25 reproduced at the quick scale (files, labels,
+data) and the verdicts of the §6 claims at the quick scale (suite/claims/b-6.toml)."""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pandas as pd
+import pytest
+
+FIGURES = [f"b-fig-{n}" for n in range(15, 26)]
+#: claims and their expected verdicts at the quick scale (paper-only claims: not checkable)
+QUICK = {"B-6.1-f": "partly", "B-6.2-a": "reproduced", "B-6.2-b": "not checkable",
+         "B-6.2-c": "not checkable", "B-6.2-d": "partly", "B-6.2-e": "reproduced",
+         "B-6.2-f": "not reproduced", "B-6.2-g": "reproduced", "B-6.2-h": "partly",
+         "B-6.2-i": "reproduced", "B-6.2-j": "reproduced", "B-6.2-k": "not checkable",
+         "B-6.2-o": "reproduced", "B-6.2-p": "not checkable", "B-6.2-q": "reproduced"}
+
+
+def _gnibench(*args):
+    return subprocess.run([sys.executable, "-m", "gnibench.suite.cli.main", *args],
+                          check=False, capture_output=True, text=True)
+
+
+@pytest.fixture(scope="module")
+def reproduced(tmp_path_factory):
+    out = tmp_path_factory.mktemp("s6")
+    r = _gnibench("reproduce", *FIGURES, "--scale", "quick", "-o", str(out), "-j", "1")
+    assert r.returncode == 0, r.stderr
+    return out
+
+
+@pytest.mark.parametrize("fid", FIGURES)
+def test_figure_files_labels_and_data(reproduced, fid):
+    d = reproduced / fid / "figure"
+    assert (d / f"{fid}.png").stat().st_size > 10_000
+    assert (d / f"{fid}.svg").is_file()
+    manifest = json.loads((d / "figure.json").read_text())
+    panels = manifest["panels"]
+    if fid == "b-fig-15":
+        assert [p["xlabel"] for p in panels] == ["r", "r"]
+        assert all(p["ylabel"] == "P" for p in panels)
+        assert all(f["points"] > 100 for p in panels for f in p["fields"])
+        return
+    assert all((p["xlabel"], p["ylabel"]) == ("q₂", "p₂") for p in panels)
+    curves = [c for p in panels for c in p["curves"]]
+    assert curves and all(c["points"] > 0 for c in curves)
+    assert panels[0]["fields"][0]["levels"] == [0.0]
+    zooms = [p for p in panels if p["zoom_of"] is not None]
+    assert all(p["zoom_of"] == 0 for p in zooms)
+
+
+def test_sections_are_on_the_plane(reproduced):
+    s = pd.read_parquet(reproduced / "b-fig-16" / "samples.parquet")
+    assert len(s) == 500 and s["p1"].abs().max() < 1e-14 and (s["p2"] > 0).all()
+    # Fig 17 is a zoom of Fig 16's run: the same cell, computed once
+    c16 = pd.read_parquet(reproduced / "b-fig-16" / "cells.parquet")
+    c17 = pd.read_parquet(reproduced / "b-fig-17" / "cells.parquet")
+    assert list(c16["method"]) == list(c17["method"])
+
+
+def test_claims_quick_verdicts(tmp_path):
+    r = _gnibench("verify", *QUICK, "--scale", "quick", "-o", str(tmp_path), "-j", "1")
+    assert r.returncode == 0, r.stderr
+    ledger = pd.read_parquet(tmp_path / "ledger.parquet").set_index("id")
+    got = {i: ledger.loc[i, "verdict"] for i in QUICK}
+    assert got == QUICK
