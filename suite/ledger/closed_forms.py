@@ -28,6 +28,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from gnibench.suite.ledger import closed_forms_b41
 
 #: integrals of the oscillator problems as combinations of the per-oscillator energies E_k
 _ENERGIES = {"harmonic-oscillator": {"states": (("q", "p"),), "H": (1.0,)},
@@ -197,6 +198,7 @@ CLOSED_FORMS = {
     "euler_observer_limit": euler_observer_limit,
     "main_lemma_decay": main_lemma_decay,
 }
+CLOSED_FORMS.update(closed_forms_b41.CLOSED_FORMS)     # [B] §4.1: the radial Kepler apsides
 
 
 def run(name: str, cells, samples) -> dict:
