@@ -30,6 +30,7 @@ import math
 import numpy as np
 from gnibench.suite.ledger import closed_forms_b7
 from gnibench.suite.ledger.closed_forms_b6 import gs_section_trace
+from gnibench.suite.ledger import closed_forms_b41
 
 #: integrals of the oscillator problems as combinations of the per-oscillator energies E_k
 _ENERGIES = {"harmonic-oscillator": {"states": (("q", "p"),), "H": (1.0,)},
@@ -201,6 +202,7 @@ CLOSED_FORMS = {
     "gs_section_trace": gs_section_trace,          # [B] §6.2 (closed_forms_b6.py)
 }
 CLOSED_FORMS.update(closed_forms_b7.CLOSED_FORMS)       # [B] §7.2 section statistics
+CLOSED_FORMS.update(closed_forms_b41.CLOSED_FORMS)     # [B] §4.1: the radial Kepler apsides
 
 
 def run(name: str, cells, samples) -> dict:
