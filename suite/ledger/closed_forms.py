@@ -28,9 +28,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from gnibench.suite.ledger import closed_forms_b7
+from gnibench.suite.ledger import closed_forms_b7, closed_forms_b41
 from gnibench.suite.ledger.closed_forms_b6 import gs_section_trace
-from gnibench.suite.ledger import closed_forms_b41
 
 #: integrals of the oscillator problems as combinations of the per-oscillator energies E_k
 _ENERGIES = {"harmonic-oscillator": {"states": (("q", "p"),), "H": (1.0,)},
