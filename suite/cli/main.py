@@ -120,7 +120,8 @@ def _parser() -> argparse.ArgumentParser:
                    help="quick (short horizons) or paper (the seeds' own)")
     v.add_argument("--format", default="text", metavar="text|json")
     v.add_argument("-o", "--output", type=_path, default=None,
-                   help="output directory (default: results/verify)")
+                   help="output directory (default: results/seeds, shared with gnibench reproduce: "
+                        "cells run by either are reused by the other)")
     v.add_argument("-j", "--jobs", type=int, default=None, metavar="N")
     v.add_argument("--executor", default="local", metavar="local|dask")
     v.add_argument("--scheduler", metavar="ADDRESS")

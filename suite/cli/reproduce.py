@@ -21,7 +21,7 @@ def add_parser(sub, path_type) -> None:
     r.add_argument("--scale", default="paper", metavar="paper|quick",
                    help="paper: the seed's horizons and step sizes (default); quick: shortened")
     r.add_argument("-o", "--output", type=path_type, default=None, metavar="DIR",
-                   help="results directory (default: results/reproduce)")
+                   help="results directory (default: results/seeds, shared with gnibench verify)")
     r.add_argument("-j", "--jobs", type=int, default=None, metavar="N",
                    help="worker processes (default: the number of cores; 1: in this process)")
     r.add_argument("--executor", default="local", metavar="local|dask",
@@ -68,10 +68,10 @@ def run(a) -> int:
                                scheduler=a.scheduler, fresh=a.fresh, summarize=render_summary)
         figures = [e.figure for e in experiments]
     draw_all(dirs, figures)
-    if not a.no_report:                 # the figures beside their runs, as a site
+    if not a.no_report:                 # everything in DIR (figures, a ledger of verify), as a site
         from gnibench.reports.site import build_site
 
-        index = build_site(dirs, out / "report")
+        index = build_site([out], out / "report")
         print(f"gnibench: reproduce: report {index}", file=sys.stderr)
     return 0
 

@@ -1,8 +1,10 @@
 """``gnibench verify [ID...|all] [--scale quick|paper] [-j N] [--list] [--format json] [-o DIR]``.
 
-Runs what the chosen claims need (through the runner: parallel, resumable, one store under
-``DIR/store``), judges each claim from the tables, prints the verdict per claim with the measured
-number beside the seed's, writes ``DIR/ledger.parquet`` and ``DIR/ledger.md``, and exits with 1
+Runs what the chosen claims need (through the runner: parallel, resumable, one store in ``DIR``,
+by default ``results/seeds``, the same as ``gnibench reproduce``'s, so either reuses the cells the
+other ran), judges each claim from the tables, prints the verdict per claim with the measured
+number beside the seed's, writes ``DIR/ledger.parquet``, ``DIR/ledger.md`` and the report site of
+``DIR`` (``DIR/report``, figures and ledger together), and exits with 1
 when a verdict differs from its ``expected`` one (a known failure that starts to pass, or the
 reverse), else 0.
 """
@@ -34,7 +36,9 @@ def verify_command(a) -> int:
     from gnibench.suite.runs import executors
 
     executors.check(a.executor, a.jobs, a.scheduler)
-    out = a.output if a.output is not None else Path("results") / "verify"
+    from gnibench.suite.runs.reproduce import DEFAULT_DIR
+
+    out = a.output if a.output is not None else DEFAULT_DIR
     experiments = _load(needed_experiments(claims, a.scale), a.scale)
     dirs = _run(experiments, out, a)
     return _judge(claims, dirs, out, a)
@@ -51,7 +55,7 @@ def _run(experiments, out: Path, a) -> dict[str, Path]:
 
     outs = [out / e.name for e in experiments]
     if experiments:
-        run_experiments(experiments, outs, out / "store", jobs=a.jobs, executor=a.executor,
+        run_experiments(experiments, outs, out, jobs=a.jobs, executor=a.executor,
                         scheduler=a.scheduler, name="verify")
     return {e.name: o for e, o in zip(experiments, outs)}
 

@@ -17,7 +17,7 @@ from gnibench.suite.foundation.errors import UserError, unknown
 from gnibench.suite.runs.experiment import Experiment, load_experiment, shipped
 from gnibench.suite.runs.scales import SCALES, check_scale
 
-DEFAULT_DIR = Path("results") / "reproduce"
+DEFAULT_DIR = Path("results") / "seeds"     # shared with gnibench verify: one store for both
 
 
 @dataclass(frozen=True)
