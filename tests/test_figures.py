@@ -12,6 +12,7 @@ import json
 import math
 import os
 
+import numpy as np
 import pytest
 from gnibench.suite.runs.reproduce import figures, load_figures, run_figures
 
@@ -65,3 +66,30 @@ def test_figure_at_quick_scale(fid, tmp_path):
 def test_figure_at_paper_scale(fid, tmp_path):
     experiment, manifest, results = _reproduce(fid, "paper", tmp_path)
     _check(experiment, manifest, results)
+
+
+def test_pieces_break_a_line_at_its_jumps():
+    from gnibench.reports.figures.plot import _pieces
+
+    t = np.linspace(0.0, 1.0, 101)
+    x = np.concatenate([t, t + 5.0, t])                 # two jumps of 4 and 6 (steps of 0.01)
+    xs, _, origins = _pieces(x, np.zeros_like(x))
+    assert origins == [0, 102, 204] and np.isnan(xs[[101, 203]]).all()
+    assert xs[origins].tolist() == [0.0, 5.0, 0.0]
+
+
+def test_domain_field_is_the_octagon():
+    """min_k g_k of geodesic-genus2's sides ([B] §8.1): positive inside Ω, zero on a side (the
+    circle of centre C e_0, radius sqrt(C² − 1), crosses the q1 axis at C − sqrt(C² − 1)),
+    negative beyond it."""
+    from gnibench.suite.runs.figure_fields import evaluate, parse_field
+
+    field = parse_field({"problem": "geodesic-genus2", "function": "domain", "x": "q1",
+                         "y": "q2", "xrange": [-1, 1], "yrange": [-1, 1]}, "test")
+    assert field["levels"] == [0.0]
+    from gnibench.problems.geodesic_genus2 import _side_constants
+
+    c = float(_side_constants()[3])
+    edge = c - math.sqrt(c * c - 1)
+    v = evaluate(field, np.array([0.0, edge, edge + 0.01]), np.zeros(3))
+    assert v[0] > 0 and abs(v[1]) < 1e-12 and v[2] < 0

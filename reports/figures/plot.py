@@ -45,7 +45,8 @@ def title_text(figure: dict, width_in: float) -> str:
     text = f"{figure['number']}. {figure['caption']}"
     if figure.get("scale") and figure["scale"] != "paper":
         text += f"  [{figure['scale']} scale]"
-    return "\n".join(textwrap.wrap(text, width=max(40, int(width_in * 13.5))))
+    # DejaVu Sans at 10.5 pt: about 11.4 characters per inch on average; keep a margin
+    return "\n".join(textwrap.wrap(text, width=max(40, int(width_in * 10.5))))
 
 
 def draw_plot(results, figure: dict):
@@ -136,6 +137,12 @@ def _draw_curve(ax, results, curve: dict, logx: bool, logy: bool) -> dict:
         if curve.get("xwrap") or curve.get("ywrap"):
             x, y = wrap(x, y, curve.get("xwrap"), curve.get("ywrap"))
         style = {"linewidth": curve.get("linewidth", 1.2), **style}
+        if curve.get("pieces"):
+            x, y, origins = _pieces(x, y)
+            out["pieces"] = len(origins)
+            for n, i in enumerate(origins[:MAX_PIECE_NUMBERS], start=1):
+                ax.annotate(str(n), (x[i], y[i]), xytext=(3, 3), textcoords="offset points",
+                            fontsize=8, color="black")
         ax.plot(x, y, color=color, label=label if first and label else None, **style)
         first = False
         if curve.get("start") and ok.any():
@@ -145,6 +152,24 @@ def _draw_curve(ax, results, curve: dict, logx: bool, logy: bool) -> dict:
                         bbox={"boxstyle": "round,pad=0.15", "facecolor": "white", "alpha": 0.75,
                               "edgecolor": "none"})
     return out
+
+
+MAX_PIECE_NUMBERS = 40
+
+
+def _pieces(x: np.ndarray, y: np.ndarray, jump: float = 10.0):
+    """The line broken where it jumps (a step of more than ``jump`` times the median step, e.g.
+    the map back into the fundamental domain, [B] (8.3)-(8.4)): x, y with a NaN at each break,
+    and the index of each piece's first point."""
+    ok = np.isfinite(x) & np.isfinite(y)
+    x, y = x[ok], y[ok]
+    if len(x) < 3:
+        return x, y, [0] if len(x) else []
+    d = np.hypot(np.diff(x), np.diff(y))
+    breaks = np.flatnonzero(d > jump * np.median(d)) + 1
+    xs, ys = np.insert(x, breaks, np.nan), np.insert(y, breaks, np.nan)
+    origins = [0] + [int(b) + k + 1 for k, b in enumerate(breaks)]
+    return xs, ys, origins
 
 
 def _draw_sets(ax, results, curve: dict, out: dict, logx: bool, logy: bool) -> dict:

@@ -13,7 +13,10 @@ constant, e.g. [B] Fig 15(b)'s level sets of H_R at I = K = 0.1 drawn through (6
 ``x = "p2"`` (r), ``y = "q2"`` (−P), ``fixed = { p1 = 0, q1 = "0.1 / p2" }`` (q1 = I/r).
 
 The function is evaluated by the problem's own compiled module (the integrals, ``eval_invariants``;
-the vector field ``base_f``): the same code the cells use.
+the vector field ``base_f``): the same code the cells use. ``function = "domain"`` (problems with
+a fundamental domain, e.g. ``geodesic-genus2``'s octagon Ω of [B] §8.1, (8.3)) is min_k g_k over
+the domain's sides (``Problem.boundary``, Ω = {g_k > 0}), so its level 0 (the default) draws the
+boundary of the domain.
 """
 from __future__ import annotations
 
@@ -52,7 +55,8 @@ def parse_field(field, where: str) -> dict:
         raise UserError(f"{where}: {unknown('kind', str(kind), FIELD_KINDS)}")
     integrals = integral_names(problem)
     function = field.get("function", "field" if kind == "quiver" else None)
-    allowed = ("field",) if kind == "quiver" else tuple(integrals)
+    allowed = ("field",) if kind == "quiver" else tuple(integrals) + (
+        ("domain",) if rec.boundary is not None else ())
     if function not in allowed:
         raise UserError(f"{where}: {unknown('function', str(function), allowed)}")
     x, y = field.get("x"), field.get("y")
@@ -151,6 +155,8 @@ def _levels(field: dict, out: dict, kind: str, where: str) -> list[float] | None
         if "levels" in field or "through" in field:
             raise UserError(f"{where}: levels and through apply to contours only")
         return None
+    if out["function"] == "domain" and "levels" not in field and "through" not in field:
+        return [0.0]                                   # the boundary of the domain
     if ("levels" in field) == ("through" in field):
         raise UserError(f"{where}: give levels = [numbers] or through = [[x, y], ...]")
     if "levels" in field:
@@ -189,6 +195,8 @@ def _evaluate_python(field: dict, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
     from gnibench.suite.metrics.base import integral_names
 
     problem, states = _states(field, np.asarray(xs, float), np.asarray(ys, float))
+    if field["function"] == "domain":
+        return _domain(problem, states)
     functions = python_functions(problem.record)
     integral = functions[f"integral_{integral_names(problem).index(field['function'])}"]
     par = problem.record.par(problem.values)
@@ -201,11 +209,30 @@ def _evaluate_python(field: dict, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
     return np.array(out)
 
 
+def _domain(problem, states: np.ndarray) -> np.ndarray:
+    """min_k g_k(y) over the sides of the problem's fundamental domain (> 0 inside, 0 on its
+    boundary), from the sympy sides of ``Problem.boundary`` (vectorized by lambdify)."""
+    from types import SimpleNamespace
+
+    import sympy as sp
+
+    rec = problem.record
+    symbols = [sp.Symbol(n) for n in rec.state + rec.model_params]
+    sides = rec.boundary.sides(SimpleNamespace(**{str(s): s for s in symbols}))
+    g = sp.lambdify(symbols, list(sides), "numpy")
+    args = [states[:, j] for j in range(rec.dim)] + list(rec.par(problem.values))
+    with np.errstate(all="ignore"):
+        values = [np.broadcast_to(np.asarray(v, float), (len(states),)) for v in g(*args)]
+    return np.min(values, axis=0)
+
+
 def evaluate(field: dict, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
     """The field's function at the points (xs, ys): values (contour) or (rows, 2) (quiver)."""
     from gnibench.suite.cell.compiled import problem_kernel
 
     problem, states = _states(field, np.asarray(xs, float), np.asarray(ys, float))
+    if field["function"] == "domain":
+        return _domain(problem, states)
     kernel = problem_kernel(problem)
     with np.errstate(all="ignore"):
         if field["kind"] == "contour":

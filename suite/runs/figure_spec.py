@@ -39,6 +39,8 @@ the drawing (:mod:`gnibench.reports.figures`) reads only the results directory. 
     linewidth = 0.5                # points (default 1.2)
     where = { chart = 1 }          # only the samples whose columns have these values (e.g. the
                                    # section points in chart Γ1 of euler-so4, [B] Fig 26)
+    pieces = true                  # a line broken where it jumps (a map back into a fundamental
+                                   # domain, [B] §8.1), the origin of each piece numbered 1, 2, ...
 
     [[figure.panels.fields]]       # a function of the problem record on a grid (no integration)
     problem = "henon-heiles"       # PROBLEM spec
@@ -70,7 +72,7 @@ from gnibench.suite.runs.figure_fields import parse_field
 FIGURE_KEYS = ("number", "caption", "kind", "layout", "size", "note", "panels", "table")
 PANEL_KEYS = ("title", "x", "y", "xlabel", "ylabel", "xscale", "yscale", "xlim", "ylim", "aspect",
               "legend", "zoom", "note", "curves", "fields")
-CURVE_KEYS = ("cells", "label", "x", "y", "style", "at", "color", "start", "xwrap", "ywrap",
+CURVE_KEYS = ("cells", "label", "x", "y", "style", "at", "color", "start", "pieces", "xwrap", "ywrap",
               "linewidth", "where")
 SELECT_KEYS = ("group", "index", "cell")
 TABLE_KEYS = ("columns", "rows", "zero_below")
@@ -250,6 +252,11 @@ def _curve(curve, cells, x: str, y: str, where: str) -> dict:
            "color": _line(curve, "color", where), "start": _line(curve, "start", where),
            "xwrap": _pair(curve, "xwrap", where, None), "ywrap": _pair(curve, "ywrap", where, None),
            "linewidth": _number(curve.get("linewidth", 1.2), f"{where}: linewidth")}
+    out["pieces"] = curve.get("pieces", False)
+    if not isinstance(out["pieces"], bool):
+        raise UserError(f"{where}: bad pieces = {out['pieces']!r}; allowed: true or false")
+    if out["pieces"] and out["style"] != "line":
+        raise UserError(f"{where}: pieces needs style = \"line\" (a broken line)")
     if not 0 < out["linewidth"] <= 10:
         raise UserError(f"{where}: bad linewidth = {out['linewidth']}; allowed: 0 < width <= 10")
     if not out["y"]:
