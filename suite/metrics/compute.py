@@ -119,8 +119,8 @@ def steps_per_period(h: float, period: float, rtol: float = 1e-9) -> int | None:
 def period_grid(choices, problem, method, every: int = 1, dt_out: float | None = None):
     """The time grid a cell runs on, given its chosen metrics: ``dt_out`` when one is given;
     else the period T when a metric needs samples at whole periods (η(nT), [B] §5.2) and the
-    cell's own samples do not fall on them (a fixed-step method whose ``every`` steps make a
-    whole number of periods keeps its grid); else None. ``gnibench solve --metrics eta`` and an
+    cell's own samples do not fall on them (a fixed-step method with N steps per period and
+    ``every`` dividing N, or a multiple of N, keeps its grid); else None. ``gnibench solve --metrics eta`` and an
     experiment group with ``eta`` and no ``dt_out`` both sample at t = nT this way."""
     from gnibench.suite.cell.grid import grid_step
 
@@ -135,6 +135,6 @@ def period_grid(choices, problem, method, every: int = 1, dt_out: float | None =
     transformed = problem.record.transformed(problem.values) is not None
     if not (v.get("adaptive") or external or transformed):
         n = steps_per_period(grid_step(method), period)
-        if n is not None and every % n == 0:
+        if n is not None and (n % every == 0 or every % n == 0):   # samples fall on t = nT
             return None
     return period
