@@ -28,6 +28,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from gnibench.suite.ledger import closed_forms_hlw
 
 #: integrals of the oscillator problems as combinations of the per-oscillator energies E_k
 _ENERGIES = {"harmonic-oscillator": {"states": (("q", "p"),), "H": (1.0,)},
@@ -196,6 +197,7 @@ CLOSED_FORMS = {
     "euler_oscillator_energy": euler_oscillator_energy,
     "euler_observer_limit": euler_observer_limit,
     "main_lemma_decay": main_lemma_decay,
+    **closed_forms_hlw.CLOSED_FORMS,         # [HLW] Ch. I: returns, cycles, asymmetry, planets
 }
 
 
