@@ -188,7 +188,29 @@ def solar_system(cells, samples) -> dict:
     return worst
 
 
+def angular_momentum_roundoff(cells, samples) -> dict:
+    """[HLW] I.2.3, HLW-2.1-b: the error of L = q1 p2 − q2 p1 against two round-off scales, over
+    the selected cells (the worst): ``ratio_L`` = max|L_n − L0| / (ε |L0| √n) (CLAIMS.md's
+    proposal) and ``ratio_qp`` = max|L_n − L0| / (ε max_n |q_n||p_n| √n): the products q1 p2 and
+    q2 p1 are each rounded to ε |q||p|, which exceeds |L| by far near the pericentre at large h."""
+    eps = float(np.finfo(float).eps)
+    out = {"ratio_L": 0.0, "ratio_qp": 0.0, "err": 0.0}
+    for row in cells.itertuples():
+        rows = _rows(samples, row.cell)
+        q = rows[["q1", "q2"]].to_numpy(dtype=float)
+        p = rows[["p1", "p2"]].to_numpy(dtype=float)
+        L0 = abs(q[0, 0] * p[0, 1] - q[0, 1] * p[0, 0])
+        err = float(np.max(np.abs(rows["err_L"].to_numpy(dtype=float))))
+        n = math.sqrt(max(float(row.steps), 1.0))
+        qp = float(np.max(np.linalg.norm(q, axis=1) * np.linalg.norm(p, axis=1)))
+        out["err"] = max(out["err"], err)
+        out["ratio_L"] = max(out["ratio_L"], err / (eps * L0 * n))
+        out["ratio_qp"] = max(out["ratio_qp"], err / (eps * qp * n))
+    return out
+
+
 CLOSED_FORMS = {
+    "angular_momentum_roundoff": angular_momentum_roundoff,
     "lv_periodic": lv_periodic,
     "lv_stages": lv_stages,
     "pendulum_asymmetry": pendulum_asymmetry,
