@@ -74,17 +74,18 @@ def _maxima(t, x):
 
 def lv_stages(cells, samples) -> dict:
     """[HLW] text after Fig 1.1, HLW-1.1-c: in each cycle the prey v peaks before the predator u.
-    ``fraction`` = share of the maxima of u whose preceding maximum (of u or v) is one of v."""
+    ``fraction`` = share of the maxima of u (between two maxima of v) that lie nearer to the
+    preceding maximum of v than to the following one, i.e. in the first half of v's cycle."""
     good, total = 0, 0
     for cell in cells["cell"]:
         rows = _rows(samples, cell)
         t = rows["t"].to_numpy(dtype=float)
-        events = sorted([(s, "u") for s in _maxima(t, rows["u"].to_numpy(dtype=float))]
-                        + [(s, "v") for s in _maxima(t, rows["v"].to_numpy(dtype=float))])
-        for k, (_, who) in enumerate(events):
-            if who == "u" and k > 0:
+        v_max = _maxima(t, rows["v"].to_numpy(dtype=float))
+        for s in _maxima(t, rows["u"].to_numpy(dtype=float)):
+            k = np.searchsorted(v_max, s)
+            if 0 < k < len(v_max):
                 total += 1
-                good += events[k - 1][1] == "v"
+                good += s - v_max[k - 1] < v_max[k] - s
     return {"fraction": good / total if total else math.nan, "cycles": float(total),
             "measured": good / total if total else math.nan}
 
