@@ -28,7 +28,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from gnibench.suite.ledger import closed_forms_b7, closed_forms_b41
+from gnibench.suite.ledger import closed_forms_b7, closed_forms_b41, closed_forms_hlw
 from gnibench.suite.ledger.closed_forms_b6 import gs_section_trace
 
 #: integrals of the oscillator problems as combinations of the per-oscillator energies E_k
@@ -199,6 +199,7 @@ CLOSED_FORMS = {
     "euler_observer_limit": euler_observer_limit,
     "main_lemma_decay": main_lemma_decay,
     "gs_section_trace": gs_section_trace,          # [B] §6.2 (closed_forms_b6.py)
+    **closed_forms_hlw.CLOSED_FORMS,         # [HLW] Ch. I: returns, cycles, asymmetry, planets
 }
 CLOSED_FORMS.update(closed_forms_b7.CLOSED_FORMS)       # [B] §7.2 section statistics
 CLOSED_FORMS.update(closed_forms_b41.CLOSED_FORMS)     # [B] §4.1: the radial Kepler apsides

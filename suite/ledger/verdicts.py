@@ -189,7 +189,8 @@ def _judge(v: Verdict, claim: Claim, values: dict) -> Verdict:
 
 def _sweep(v: Verdict, claim: Claim, cells, samples) -> Verdict:
     points = []
-    for key in pd.unique(cells[claim.sweep].astype(str)):
+    chosen = pd.concat([select(cells, s["cells"]) for s in claim.values.values()])
+    for key in pd.unique(chosen[claim.sweep].astype(str)):     # among the selected cells
         values = {k: _value(s, cells, samples, (claim.sweep, key)) for k, s in claim.values.items()}
         point = _judge(Verdict(claim.id, "", "", "", "", None, "", ""), claim, values)
         points.append((key, f"{point.verdict} ({_text(point.measured)})"))
