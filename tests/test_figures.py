@@ -93,3 +93,26 @@ def test_domain_field_is_the_octagon():
     edge = c - math.sqrt(c * c - 1)
     v = evaluate(field, np.array([0.0, edge, edge + 0.01]), np.zeros(3))
     assert v[0] > 0 and abs(v[1]) < 1e-12 and v[2] < 0
+
+
+def test_redraw_uses_the_tables_and_refuses_stale_ones(tmp_path, capsys, monkeypatch):
+    """`reproduce ID --redraw` draws again from the tables (no integration: the store may be
+    gone) with the figure section as it is now; when the file's cells changed it refuses."""
+    import shutil
+
+    from gnibench.suite.cli.main import main
+    from gnibench.suite.runs import experiment
+
+    assert main(["reproduce", "hlw-fig-1.4", "--scale", "quick", "-o", str(tmp_path), "-j", "1",
+                 "--no-report"]) == 0
+    png = tmp_path / "hlw-fig-1.4" / "figure" / "hlw-fig-1.4.png"
+    png.unlink()
+    shutil.rmtree(tmp_path / "parts")
+    assert main(["reproduce", "hlw-fig-1.4", "--redraw", "-o", str(tmp_path), "--no-report"]) == 0
+    assert png.stat().st_size > 1000 and not (tmp_path / "parts").exists()
+    text = experiment.shipped()["hlw-fig-1.4"]
+    monkeypatch.setattr(experiment, "shipped", lambda: {"hlw-fig-1.4": text.replace(
+        "h=0.3", "h=0.25")})
+    capsys.readouterr()
+    assert main(["reproduce", "hlw-fig-1.4", "--redraw", "-o", str(tmp_path)]) == 2
+    assert "the cells of the file changed" in capsys.readouterr().err

@@ -92,6 +92,12 @@ class Cell:
     reference: str | None = None
     section: int | None = None      # crossings of the problem's Poincaré section (suite/cell/sections.py)
 
+    def described(self) -> dict:
+        """What the tables' metadata records of the cell (and a redraw compares)."""
+        return {"cell": self.id, "problem": self.problem, "method": self.method,
+                "steps": self.steps, "t_end": self.t_end, "every": self.every,
+                "dt_out": self.dt_out, "reference": self.reference, "section": self.section}
+
 
 @dataclass(frozen=True)
 class Experiment:

@@ -134,9 +134,7 @@ def current_figure(fid: str, results: Path) -> dict:
 
     meta = read_parquet_meta(results / "cells.parquet")
     experiment = load_experiment(fid, meta.get("scale", "paper"))
-    now = [{"cell": c.id, "problem": c.problem, "method": c.method, "steps": c.steps,
-            "t_end": c.t_end, "every": c.every} for c in experiment.cells]
-    if now != meta.get("cells"):
+    if [c.described() for c in experiment.cells] != meta.get("cells"):
         raise UserError(f"{fid}: the cells of the file changed since the tables in {results} were "
                         f"computed; run gnibench reproduce {fid} again (without --redraw)")
     return experiment.figure

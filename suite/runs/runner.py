@@ -236,8 +236,4 @@ def provenance(e: Experiment, ndone: int) -> dict:
             "scale": e.scale, "figure": e.figure,
             "versions": versions(), "complete": ndone == len(e.cells), "cells_done": ndone,
             "cells_total": len(e.cells),
-            "cells": [{"cell": c.id, "problem": c.problem, "method": c.method,
-                       "steps": c.steps, "t_end": c.t_end, "every": c.every,
-                       "dt_out": c.dt_out, "reference": getattr(c, "reference", None),
-                       "section": getattr(c, "section", None)}
-                      for c in e.cells]}
+            "cells": [c.described() for c in e.cells]}
