@@ -163,8 +163,9 @@ def experiment_page(res, img_dir: Path, slug: str, thresholds) -> dict:
         samples = res.samples()
     except (OSError, ValueError):
         samples = None
-    for i, problem in enumerate(dict.fromkeys(cells["problem"])):
-        part = cells[cells["problem"] == problem]
+    sections = problem_sections(cells["problem"])
+    for i, problem in enumerate(dict.fromkeys(sections)):
+        part = cells[sections == problem]
         prefix = f"{i:02d}-" + re.sub(r"[^A-Za-z0-9._-]+", "_", str(problem))[:40]
         ps = samples[samples["cell"].isin(part["cell"])] if samples is not None else None
         figs = plots.time_figures(problem, part, ps, img_dir, prefix, slug) if ps is not None \
@@ -181,6 +182,23 @@ def experiment_page(res, img_dir: Path, slug: str, thresholds) -> dict:
             "league": league_tables(part, wall, thresholds),
             "table": cells_table(part, ps, wall, compile_s), "failed": failed, "groups": groups})
     return page
+
+
+MAX_SPECS_PER_PROBLEM = 6
+
+
+def problem_sections(problems):
+    """The section of the page each cell goes to: its problem spec, or the bare problem id when
+    the experiment runs that problem from more than ``MAX_SPECS_PER_PROBLEM`` specs (the
+    initial points of a set, [HLW] Figs 1.1 and 1.3: one section, not one per point)."""
+    import pandas as pd
+
+    problems = pd.Series(problems).astype(str)
+    ids = problems.str.partition(":")[0]
+    many = {i for i, n in problems.groupby(ids).nunique().items() if n > MAX_SPECS_PER_PROBLEM}
+    return pd.Series(problems.where(~ids.isin(many), ids + " (" + problems.groupby(ids)
+                                    .transform("nunique").astype(str) + " initial values)"),
+                     index=problems.index)
 
 
 def index_entry(page: dict) -> dict:

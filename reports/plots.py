@@ -211,7 +211,7 @@ def section_coords(problem: str) -> tuple[str, ...]:
     """The recorded coordinates of a problem's (first) Poincaré section."""
     from gnibench.problems import REGISTRY
 
-    record = REGISTRY.get(problem.partition(":")[0])
+    record = REGISTRY.get(problem.split(" ")[0].partition(":")[0])
     if record is None or not record.sections:
         return ()
     return tuple(record.sections[0].coords)

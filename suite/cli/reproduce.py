@@ -67,7 +67,7 @@ def run(a) -> int:
         dirs = rep.run_figures(experiments, out, jobs=a.jobs, executor=a.executor,
                                scheduler=a.scheduler, fresh=a.fresh, summarize=render_summary)
         figures = [e.figure for e in experiments]
-    draw_all(dirs, figures)
+    draw_all(dirs, figures, jobs=None if a.redraw else a.jobs)
     if not a.no_report:                 # everything in DIR (figures, a ledger of verify), as a site
         from gnibench.reports.site import build_site
 
@@ -76,19 +76,38 @@ def run(a) -> int:
     return 0
 
 
-def draw_all(dirs: list[Path], figures: list[dict] | None = None, log=None) -> list[dict]:
-    """Draw the figure of each results directory (``figures``: the figure to draw from each, by
-    default the one stored with its tables); one line per figure on ``log``."""
+def _draw(d: Path, figure: dict | None):
     from gnibench.reports.figures import FigureDataError, draw_figure
+
+    try:
+        return draw_figure(d, figure=figure)
+    except FigureDataError as e:
+        return UserError(str(e))
+
+
+def draw_all(dirs: list[Path], figures: list[dict] | None = None, log=None,
+             jobs: int | None = None) -> list[dict]:
+    """Draw the figure of each results directory (``figures``: the figure to draw from each, by
+    default the one stored with its tables), in ``jobs`` processes (default: the number of
+    cores; drawing is independent per figure and reads tables only); one line per figure on
+    ``log``, in order."""
+    import os
 
     log = sys.stderr if log is None else log
     figures = figures or [None] * len(dirs)
+    jobs = min(jobs or os.cpu_count() or 1, len(dirs))
+    if jobs > 1:
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor
+
+        with ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("spawn")) as pool:
+            results = list(pool.map(_draw, dirs, figures))
+    else:
+        results = [_draw(d, f) for d, f in zip(dirs, figures)]
     manifests = []
-    for d, figure in zip(dirs, figures):
-        try:
-            manifest = draw_figure(d, figure=figure)
-        except FigureDataError as e:
-            raise UserError(str(e)) from None
+    for d, manifest in zip(dirs, results):
+        if isinstance(manifest, UserError):
+            raise manifest
         manifests.append(manifest)
         empty = [c["label"] for p in manifest["panels"] for c in p["curves"] if not c["points"]]
         warn = f"; NO DATA for: {', '.join(empty)}" if empty else ""

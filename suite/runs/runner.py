@@ -23,9 +23,10 @@ which order the cells ran.
 
 Resuming: running the same command again reuses every stored cell whose key matches (spec, code
 and versions; :func:`gnibench.suite.runs.store.cell_key`) and computes only the others; ``fresh``
-ignores the store. The consolidated tables are rewritten after a cell finishes whenever the time
-since the last write is at least ``FLUSH_RATIO`` times what that write took, at the end, and on
-Ctrl-C; unfinished cells appear with status ``pending`` and ``complete: false``.
+ignores the store. An experiment's consolidated tables are rewritten after one of its cells
+finishes whenever the time since their last write is at least ``FLUSH_RATIO`` times what that
+write took (so that a run over many experiments, e.g. ``gnibench reproduce all``, does not rewrite
+the tables of the experiments whose cells are not running), at the end, and on Ctrl-C; unfinished cells appear with status ``pending`` and ``complete: false``.
 
 A cell that raises (anything but a KeyboardInterrupt) gets status ``error`` with the exception
 type and message as reason, and the run goes on. Bad input never reaches this point: the whole
@@ -114,8 +115,10 @@ def run_experiments(experiments: list[Experiment], outs: list[Path], store_root:
                 store.write(key, _part(outcome), writers[0].empty_samples)
                 done.add(key)
                 progress.cell_done(outcome)
-                for w in writers:
-                    if w.due():
+                for w in writers:      # only the experiments that hold the cell have news
+                    if key in w.key_set:
+                        w.dirty = True
+                    if w.dirty and w.due():
                         w.flush(done)
         except KeyboardInterrupt:
             progress.close()
@@ -152,6 +155,8 @@ class Consolidator:
 
         self.experiment, self.store, self.out, self.summarize = experiment, store, out, summarize
         self.keys = {c.id: cell_key(c) for c in experiment.cells}
+        self.key_set = set(self.keys.values())
+        self.dirty = False          # a cell of this experiment finished since the last write
         self.state_names = experiment_states(experiment)
         self.empty_samples = samples_table([])
         self.last_write, self.write_cost = time.perf_counter(), 0.0
@@ -202,6 +207,7 @@ class Consolidator:
             atomic_write(out / "summary.md", lambda p: Path(p).write_text(text, encoding="utf-8"))
         self.last_write = time.perf_counter()
         self.write_cost = self.last_write - t0
+        self.dirty = False
 
 
 def restamp(part: Part | None, cell) -> Part | None:
