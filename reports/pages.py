@@ -206,4 +206,5 @@ def index_entry(page: dict) -> dict:
     return {k: page[k] for k in ("slug", "name", "title", "reference", "complete", "cells_done",
                                  "cells_total", "statuses")} | {
         "problems": [p["name"] for p in page["problems"]],
-        "has_figure": bool(page.get("figure"))}
+        "has_figure": bool(page.get("figure")),
+        "thumb": next(iter((page.get("figure") or {}).get("images") or []), "")}

@@ -101,16 +101,35 @@ def ledger_page(ledger, name: str, pages: set[str]) -> dict:
             **ledger_context(ledger.table, meta, pages)}
 
 
+MAX_NAV = 8
+
+
+def natural_key(name: str) -> tuple:
+    """Sort key with the numbers inside a name compared as numbers (hlw-fig-1.2 < hlw-fig-1.10)."""
+    return tuple((0, int(p), "") if p.isdigit() else (1, 0, p)
+                 for p in re.split(r"(\d+)", str(name)) if p)
+
+
 def build_site(dirs: list[Path], site: Path, thresholds=DEFAULT_THRESHOLDS,
                benchmarks: Path | None = None, log=None) -> Path:
     """Write the site for the results directories ``dirs`` into ``site``; return index.html.
 
     ``thresholds``: the accuracies ε of the league tables. ``benchmarks``: a benchmark storage
     directory (pytest-benchmark layout, ``<machine>/NNNN_<commit>.json``) for the timing page.
+    Diverged cells (inf, overflow on log axes) are drawn as far as they are finite, silently.
     """
+    import numpy as np
+
+    with np.errstate(all="ignore"):
+        return _build_site(dirs, site, thresholds, benchmarks, log)
+
+
+def _build_site(dirs: list[Path], site: Path, thresholds, benchmarks: Path | None,
+                log) -> Path:
     from gnibench.reports.timing import timing_page
 
     found, ledgers = find_results(dirs)
+    found = sorted(found, key=lambda r: natural_key(r.name))   # b-fig-2 before b-fig-10
     site = Path(site)
     site.mkdir(parents=True, exist_ok=True)
     img = site / "img"
@@ -131,7 +150,8 @@ def build_site(dirs: list[Path], site: Path, thresholds=DEFAULT_THRESHOLDS,
     ledger_pages = [ledger_page(lg, _unique(f"ledger-{lg.dir.name}", taken), slugs)
                     for lg in ledgers]
     timing = timing_page(benchmarks, img / "timing", "timing") if benchmarks else None
-    common = {"nav": [{"slug": p["slug"], "name": p["name"]} for p in pages],
+    nav = pages if len(pages) <= MAX_NAV else []       # many experiments: the index lists them
+    common = {"nav": [{"slug": p["slug"], "name": p["name"]} for p in nav],
               "has_timing": timing is not None,
               "ledgers": [{"slug": lp["name"], "name": lp["title"], "total": lp["total"],
                            "counts": lp["counts"]} for lp in ledger_pages],
