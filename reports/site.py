@@ -17,6 +17,7 @@ than any backtick run inside it.
 """
 from __future__ import annotations
 
+import os
 import re
 import shutil
 import time
@@ -110,6 +111,24 @@ def natural_key(name: str) -> tuple:
                  for p in re.split(r"(\d+)", str(name)) if p)
 
 
+PARALLEL_PAGES = 4           # from this many experiments on, pages are drawn in parallel
+
+
+def _page(results_dir: Path, img_dir: Path, thresholds) -> dict:
+    """One experiment's page (its plots drawn into ``img_dir``), from its results directory."""
+    import numpy as np
+    from gnibench.reports.results import load_results
+
+    res = load_results(results_dir)
+    if img_dir.exists():
+        shutil.rmtree(img_dir)
+    img_dir.mkdir(parents=True)
+    with np.errstate(all="ignore"):
+        page = experiment_page(res, img_dir, img_dir.name, thresholds)
+    _copy_figure(res, img_dir)
+    return page
+
+
 def build_site(dirs: list[Path], site: Path, thresholds=DEFAULT_THRESHOLDS,
                benchmarks: Path | None = None, log=None) -> Path:
     """Write the site for the results directories ``dirs`` into ``site``; return index.html.
@@ -135,16 +154,18 @@ def _build_site(dirs: list[Path], site: Path, thresholds, benchmarks: Path | Non
     img = site / "img"
     html, md = _environments()
     taken: set[str] = set()
-    pages = []
-    for res in found:
-        name = _unique(res.name, taken)
-        img_dir = img / name
-        if img_dir.exists():
-            shutil.rmtree(img_dir)
-        img_dir.mkdir(parents=True)
-        pages.append(experiment_page(res, img_dir, name, thresholds))
-        _copy_figure(res, img_dir)
-        if log is not None:
+    jobs = [(res.dir, img / _unique(res.name, taken), thresholds) for res in found]
+    workers = min(os.cpu_count() or 1, len(jobs)) if len(jobs) >= PARALLEL_PAGES else 1
+    if workers > 1:          # pages are independent (each draws its own plots): one per process
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor
+
+        with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+            pages = list(pool.map(_page, *zip(*jobs)))
+    else:
+        pages = [_page(*job) for job in jobs]
+    if log is not None:
+        for res in found:
             print(f"gnibench: report: {res.name} ({len(res.cells)} cells)", file=log, flush=True)
     slugs = {p["slug"] for p in pages}
     ledger_pages = [ledger_page(lg, _unique(f"ledger-{lg.dir.name}", taken), slugs)
