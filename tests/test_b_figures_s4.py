@@ -15,15 +15,16 @@ from gnibench.suite.cli.main import main
 from gnibench.suite.ledger.closed_forms_b41 import apsides
 from gnibench.suite.ledger.entries import load_ledger
 
+
 ROOT = Path(__file__).resolve().parents[1]
 FIGURES = [f"b-fig-{k}" for k in range(1, 9)]
 CLAIMS = [f"B-4.1-{c}" for c in "abcdefghijk"] + ["B-3-d"]   # B-2-f: an aggregate over §5, §6
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")    # once per worker (pyproject: --dist loadscope, one worker)
 def reproduced(tmp_path_factory):
     out = tmp_path_factory.mktemp("b-figures-s4")
-    assert main(["reproduce", *FIGURES, "--scale", "quick", "-o", str(out), "-j", "1"]) == 0
+    assert main(["reproduce", *FIGURES, "--scale", "quick", "-o", str(out), "-j", "1", "--no-report"]) == 0
     return out
 
 
@@ -112,7 +113,7 @@ def test_apsides_closed_form():
 def test_quick_scale_verdicts(tmp_path, capsys):
     """Every claim added for §2-§4 has its expected verdict at the quick scale, or is not
     checkable there (scale = "paper", or an aggregate)."""
-    code = main(["verify", *CLAIMS, "--scale", "quick", "-o", str(tmp_path), "-j", "1",
+    code = main(["verify", *CLAIMS, "--scale", "quick", "-o", str(tmp_path), "-j", "1", "--no-report",
                  "--format", "json"])
     captured = capsys.readouterr()
     assert code == 0, captured.err
@@ -134,7 +135,7 @@ def test_quick_scale_verdicts(tmp_path, capsys):
 
 @pytest.mark.slow
 def test_paper_scale_verdicts(tmp_path, capsys):
-    code = main(["verify", *CLAIMS, "--scale", "paper", "-o", str(tmp_path), "-j", "1",
+    code = main(["verify", *CLAIMS, "--scale", "paper", "-o", str(tmp_path), "-j", "1", "--no-report",
                  "--format", "json"])
     captured = capsys.readouterr()
     assert code == 0, captured.err

@@ -10,6 +10,7 @@ import pytest
 from gnibench.suite.cli.main import main
 from gnibench.suite.ledger.entries import load_ledger
 
+
 FIGURES = [f"b-fig-{n}" for n in range(9, 15)]
 CLAIMS = ["B-5.1-d"] + [f"B-5.2-{x}" for x in "abcdefghij"]
 PAPER_ONLY = {"B-5.2-b", "B-5.2-e", "B-5.2-h"}      # judged over 10⁵ revolutions only
@@ -23,10 +24,10 @@ def _spec(name: str) -> dict:
     return tomllib.loads((root / f"{name}.toml").read_text(encoding="utf-8"))
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")    # once per worker (pyproject: --dist loadscope, one worker)
 def figures(tmp_path_factory):
     out = tmp_path_factory.mktemp("s5")
-    assert main(["reproduce", *FIGURES, "--scale", "quick", "-o", str(out), "-j", "1"]) == 0
+    assert main(["reproduce", *FIGURES, "--scale", "quick", "-o", str(out), "-j", "1", "--no-report"]) == 0
     return out
 
 
@@ -75,7 +76,7 @@ def test_claims_are_linked_and_flagged():
 
 
 def _verify(tmp_path, capsys, scale: str) -> dict:
-    code = main(["verify", *CLAIMS, "--scale", scale, "-o", str(tmp_path / "v"), "-j", "1",
+    code = main(["verify", *CLAIMS, "--scale", scale, "-o", str(tmp_path / "v"), "-j", "1", "--no-report",
                  "--format", "json"])
     captured = capsys.readouterr()
     assert code == 0, captured.err

@@ -9,6 +9,7 @@ import sys
 import pandas as pd
 import pytest
 
+
 FIGURES = [f"b-fig-{n}" for n in range(15, 26)]
 #: claims and their expected verdicts at the quick scale (paper-only claims: not checkable)
 QUICK = {"B-6.1-f": "partly", "B-6.2-a": "reproduced", "B-6.2-b": "not checkable",
@@ -23,10 +24,10 @@ def _gnibench(*args):
                           check=False, capture_output=True, text=True)
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")    # once per worker (pyproject: --dist loadscope, one worker)
 def reproduced(tmp_path_factory):
     out = tmp_path_factory.mktemp("s6")
-    r = _gnibench("reproduce", *FIGURES, "--scale", "quick", "-o", str(out), "-j", "1")
+    r = _gnibench("reproduce", *FIGURES, "--scale", "quick", "-o", str(out), "-j", "1", "--no-report")
     assert r.returncode == 0, r.stderr
     return out
 
@@ -61,7 +62,8 @@ def test_sections_are_on_the_plane(reproduced):
 
 
 def test_claims_quick_verdicts(tmp_path):
-    r = _gnibench("verify", *QUICK, "--scale", "quick", "-o", str(tmp_path), "-j", "1")
+    r = _gnibench("verify", *QUICK, "--scale", "quick", "-o", str(tmp_path), "-j", "1",
+                  "--no-report")
     assert r.returncode == 0, r.stderr
     ledger = pd.read_parquet(tmp_path / "ledger.parquet").set_index("id")
     got = {i: ledger.loc[i, "verdict"] for i in QUICK}

@@ -13,6 +13,7 @@ from gnibench.suite.foundation.errors import UserError
 from gnibench.suite.ledger.closed_forms_b7 import so4_growth, so4_overlap, so4_plateau
 from gnibench.suite.ledger.entries import load_ledger, missing_parts
 
+
 FIGURES = {"b-fig-26": ("x₅", "x₆"), "b-fig-27": ("t", "|H3 − H3(x₀)|"),
            "b-fig-28": ("t", "|H1 − H1(x₀)|"), "b-fig-29": ("t", "|H2 − H2(x₀)|"),
            "b-fig-30": ("t", "|Hi − Hi(x₀)|"), "b-fig-31": ("q₁", "q₂"), "b-fig-32": ("t", "|H − H0|")}
@@ -21,10 +22,10 @@ CLAIMS = ["B-7.2-a", "B-7.2-b", "B-7.2-c", "B-7.2-d", "B-7.2-e", "B-7.2-f", "B-7
 #: parts of B-X-* in sections other helpers write (CLAIMS.md ids); empty once merged
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")    # once per worker (pyproject: --dist loadscope, one worker)
 def figures(tmp_path_factory):
     out = tmp_path_factory.mktemp("s78")
-    assert main(["reproduce", *FIGURES, "--scale", "quick", "-o", str(out), "-j", "1"]) == 0
+    assert main(["reproduce", *FIGURES, "--scale", "quick", "-o", str(out), "-j", "1", "--no-report"]) == 0
     return out
 
 
@@ -78,7 +79,7 @@ def test_fig_31_records_its_random_start(figures):
 
 
 def test_claims_have_their_expected_verdicts_at_quick_scale(tmp_path, capsys):
-    code = main(["verify", *CLAIMS, "--scale", "quick", "-o", str(tmp_path), "-j", "1",
+    code = main(["verify", *CLAIMS, "--scale", "quick", "-o", str(tmp_path), "-j", "1", "--no-report",
                  "--format", "json"])
     rows = {r["id"]: r for r in json.loads(capsys.readouterr().out)}
     paper_only = {i for i in CLAIMS if load_ledger()[i].scale == "paper"}

@@ -17,6 +17,7 @@ from gnibench.suite.ledger import closed_forms_hlw
 from gnibench.suite.ledger.entries import load_ledger
 from gnibench.suite.runs.experiment import shipped
 
+
 FIGURES = ["hlw-fig-1.1", "hlw-fig-1.2", "hlw-fig-1.3", "hlw-fig-1.4", "hlw-fig-2.2", "hlw-fig-2.3",
            "hlw-fig-2.4", "hlw-fig-3.1", "hlw-table-2.1"]
 CLAIMS_MD = Path(__file__).resolve().parents[2] / "shared" / "CLAIMS.md"
@@ -28,10 +29,10 @@ CLAIMS = ["HLW-1.1-b", "HLW-1.1-c", "HLW-1.2-b", "HLW-1.2-d", "HLW-1.3-e", "HLW-
           "HLW-2.1-table-L-SV", "HLW-2.1-table-G-IMR", "HLW-2.1-table-H-SV"]
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")    # once per worker (pyproject: --dist loadscope, one worker)
 def reproduced(tmp_path_factory):
     out = tmp_path_factory.mktemp("hlw-figures")
-    assert main(["reproduce", *FIGURES, "--scale", "quick", "-j", "1", "-o", str(out)]) == 0
+    assert main(["reproduce", *FIGURES, "--scale", "quick", "-j", "1", "-o", str(out), "--no-report"]) == 0
     return out
 
 
@@ -74,7 +75,7 @@ def test_table_2_1_reads_as_the_book_where_it_should(reproduced):
 
 
 def test_representative_claims_have_their_expected_verdicts(tmp_path, capsys):
-    code = main(["verify", *CLAIMS, "--scale", "quick", "-o", str(tmp_path / "v"), "-j", "1",
+    code = main(["verify", *CLAIMS, "--scale", "quick", "-o", str(tmp_path / "v"), "-j", "1", "--no-report",
                  "--format", "json"])
     captured = capsys.readouterr()
     rows = {r["id"]: r for r in json.loads(captured.out)}
@@ -148,7 +149,7 @@ def test_paper_scale_verdicts(tmp_path, capsys, request):
     if "slow" not in (request.config.getoption("markexpr") or ""):
         pytest.skip("paper scale: run with pytest -m slow")
     ids = [i for i in load_ledger() if i.startswith("HLW-")]
-    code = main(["verify", *ids, "--scale", "paper", "-o", str(tmp_path / "v"), "-j", "1",
+    code = main(["verify", *ids, "--scale", "paper", "-o", str(tmp_path / "v"), "-j", "1", "--no-report",
                  "--format", "json"])
     rows = {r["id"]: r for r in json.loads(capsys.readouterr().out)}
     assert code == 0, [(i, r["verdict"]) for i, r in rows.items() if r["verdict"] != r["expected"]]
