@@ -15,7 +15,6 @@ from gnibench.suite.cli.main import main
 from gnibench.suite.ledger.closed_forms_b41 import apsides
 from gnibench.suite.ledger.entries import load_ledger
 
-
 ROOT = Path(__file__).resolve().parents[1]
 FIGURES = [f"b-fig-{k}" for k in range(1, 9)]
 CLAIMS = [f"B-4.1-{c}" for c in "abcdefghijk"] + ["B-3-d"]   # B-2-f: an aggregate over §5, §6

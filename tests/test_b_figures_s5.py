@@ -10,7 +10,6 @@ import pytest
 from gnibench.suite.cli.main import main
 from gnibench.suite.ledger.entries import load_ledger
 
-
 FIGURES = [f"b-fig-{n}" for n in range(9, 15)]
 CLAIMS = ["B-5.1-d"] + [f"B-5.2-{x}" for x in "abcdefghij"]
 PAPER_ONLY = {"B-5.2-b", "B-5.2-e", "B-5.2-h"}      # judged over 10⁵ revolutions only

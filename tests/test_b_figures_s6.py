@@ -9,7 +9,6 @@ import sys
 import pandas as pd
 import pytest
 
-
 FIGURES = [f"b-fig-{n}" for n in range(15, 26)]
 #: claims and their expected verdicts at the quick scale (paper-only claims: not checkable)
 QUICK = {"B-6.1-f": "partly", "B-6.2-a": "reproduced", "B-6.2-b": "not checkable",

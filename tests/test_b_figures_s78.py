@@ -13,7 +13,6 @@ from gnibench.suite.foundation.errors import UserError
 from gnibench.suite.ledger.closed_forms_b7 import so4_growth, so4_overlap, so4_plateau
 from gnibench.suite.ledger.entries import load_ledger, missing_parts
 
-
 FIGURES = {"b-fig-26": ("x₅", "x₆"), "b-fig-27": ("t", "|H3 − H3(x₀)|"),
            "b-fig-28": ("t", "|H1 − H1(x₀)|"), "b-fig-29": ("t", "|H2 − H2(x₀)|"),
            "b-fig-30": ("t", "|Hi − Hi(x₀)|"), "b-fig-31": ("q₁", "q₂"), "b-fig-32": ("t", "|H − H0|")}

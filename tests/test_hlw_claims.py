@@ -17,7 +17,6 @@ from gnibench.suite.ledger import closed_forms_hlw
 from gnibench.suite.ledger.entries import load_ledger
 from gnibench.suite.runs.experiment import shipped
 
-
 FIGURES = ["hlw-fig-1.1", "hlw-fig-1.2", "hlw-fig-1.3", "hlw-fig-1.4", "hlw-fig-2.2", "hlw-fig-2.3",
            "hlw-fig-2.4", "hlw-fig-3.1", "hlw-table-2.1"]
 CLAIMS_MD = Path(__file__).resolve().parents[2] / "shared" / "CLAIMS.md"
