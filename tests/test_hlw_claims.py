@@ -142,11 +142,9 @@ def test_angular_momentum_roundoff_scales():
 
 
 @pytest.mark.slow
-def test_paper_scale_verdicts(tmp_path, capsys, request):
+def test_paper_scale_verdicts(tmp_path, capsys):
     """The paper-scale ledger of [HLW] Ch. I (about 30 s on one core with warm kernels): every
     claim has its expected verdict, HLW-2.4-d (3 million years) included. Runs with -m slow."""
-    if "slow" not in (request.config.getoption("markexpr") or ""):
-        pytest.skip("paper scale: run with pytest -m slow")
     ids = [i for i in load_ledger() if i.startswith("HLW-")]
     code = main(["verify", *ids, "--scale", "paper", "-o", str(tmp_path / "v"), "-j", "1", "--no-report",
                  "--format", "json"])

@@ -59,12 +59,13 @@ class GridPlan:
                 "rules": "suite/cell/timegrid.py"}
 
 
-def check_dt_out(dt_out) -> float | None:
+def check_dt_out(dt_out, name: str = "--dt-out") -> float | None:
+    """A grid spacing: None, or a finite number > 0 (``name``: how the user wrote it)."""
     if dt_out is None:
         return None
     if isinstance(dt_out, bool) or not isinstance(dt_out, (int, float)) or not (
             math.isfinite(dt_out) and dt_out > 0):
-        raise UserError(f"bad --dt-out {dt_out!r}; allowed: a finite number > 0")
+        raise UserError(f"bad {name} {dt_out!r}; allowed: a finite number > 0")
     return float(dt_out)
 
 

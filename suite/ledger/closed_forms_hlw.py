@@ -38,16 +38,16 @@ def _lv_returns(rows) -> tuple[list[float], list[float]]:
     g = v - v[0]
     sign = math.copysign(1.0, fv[0]) if fv[0] != 0 else 1.0
     times, dist = [], []
-    for i in range(1, len(t) - 1):
-        if sign * g[i] < 0 <= sign * g[i + 1] and sign * fv[i + 1] > 0:
-            lo, hi = 0.0, 1.0                       # bisection on the Hermite interpolant of v
-            for _ in range(60):
-                mid = 0.5 * (lo + hi)
-                gm = _hermite(t[i], t[i + 1], g[i], g[i + 1], fv[i], fv[i + 1], mid)
-                lo, hi = (mid, hi) if sign * gm < 0 else (lo, mid)
-            s = 0.5 * (lo + hi)
-            times.append(t[i] + s * (t[i + 1] - t[i]))
-            dist.append(abs(_hermite(t[i], t[i + 1], u[i], u[i + 1], fu[i], fu[i + 1], s) - u[0]))
+    crossed = (sign * g[1:-1] < 0) & (sign * g[2:] >= 0) & (sign * fv[2:] > 0)
+    for i in np.flatnonzero(crossed) + 1:          # a few returns: locate each one
+        lo, hi = 0.0, 1.0                       # bisection on the Hermite interpolant of v
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            gm = _hermite(t[i], t[i + 1], g[i], g[i + 1], fv[i], fv[i + 1], mid)
+            lo, hi = (mid, hi) if sign * gm < 0 else (lo, mid)
+        s = 0.5 * (lo + hi)
+        times.append(t[i] + s * (t[i + 1] - t[i]))
+        dist.append(abs(_hermite(t[i], t[i + 1], u[i], u[i + 1], fu[i], fu[i + 1], s) - u[0]))
     return times, dist
 
 

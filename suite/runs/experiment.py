@@ -246,13 +246,12 @@ def _horizon(group: dict, defaults: dict, where: str) -> tuple[int | None, float
 
 def _dt_out(group: dict, defaults: dict, where: str) -> float | None:
     """The time grid of a group (its own dt_out replaces the top-level one)."""
-    value = group.get("dt_out", defaults.get("dt_out"))
-    if value is None:
-        return None
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not (
-            math.isfinite(value) and value > 0):
-        raise UserError(f"{where}: bad dt_out = {value!r}; allowed: a finite number > 0")
-    return float(value)
+    from gnibench.suite.cell.timegrid import check_dt_out
+
+    try:
+        return check_dt_out(group.get("dt_out", defaults.get("dt_out")), "dt_out =")
+    except UserError as e:
+        raise UserError(f"{where}: {e}") from None
 
 
 def _section(group: dict, defaults: dict, where: str) -> int | None:
