@@ -158,8 +158,9 @@ def _parser() -> argparse.ArgumentParser:
 
 def _solve(a) -> int:
     from gnibench.suite.cell.driver import Interrupted
-    from gnibench.suite.cell.solve import solve
-    from gnibench.suite.metrics.compute import apply, parse_metrics
+    from gnibench.suite.cell.solve import solve_cell
+    from gnibench.suite.metrics.cells import make_cell
+    from gnibench.suite.metrics.compute import apply
     from gnibench.suite.runs.progress import SolveProgress
     from gnibench.suite.runs.storage import write_result
 
@@ -167,7 +168,6 @@ def _solve(a) -> int:
         raise UserError("--format parquet needs -o FILE (binary output is not written to stdout)")
     if a.output is not None:
         check_output_file(a.output)
-    choices = parse_metrics(a.metrics or "")
     if a.section is not None:
         if a.every != 1:
             raise UserError("--every does not apply with --section (the section points are written)")
@@ -177,22 +177,18 @@ def _solve(a) -> int:
         if a.dt_out is not None:
             raise UserError("--dt-out does not apply with --section (the section points are "
                             "written)")
-    if a.section is None and a.metrics:           # eta: samples at whole periods t = nT
-        from gnibench.suite.cell.spec import prepare
-        from gnibench.suite.metrics.compute import period_grid
-
-        a.dt_out = period_grid(choices, *prepare(a.problem, a.method), a.every, a.dt_out)
+    cell = make_cell(a.problem, a.method, steps=a.steps, t_end=a.t_end, every=a.every,
+                     dt_out=a.dt_out, section=a.section, reference=a.reference,
+                     metrics=() if a.metrics is None else a.metrics)
     progress = SolveProgress(f"{a.problem} {a.method}")
     interrupted = None
     try:
-        traj = solve(a.problem, a.method, steps=a.steps, t_end=a.t_end, every=a.every,
-                     reference=a.reference, section=a.section, dt_out=a.dt_out,
-                     progress=progress)
+        traj = solve_cell(cell, progress=progress)
     except Interrupted as e:              # keep what was computed, then exit 130
         traj, interrupted = e.partial, e
     finally:
         progress.close()
-    metrics, skipped = apply(traj, choices)
+    metrics, skipped = apply(traj, cell.metrics, problem=cell.problem)
     write_result(traj, metrics, a.format, a.output, sys.stdout)
     if interrupted is not None:
         raise interrupted
