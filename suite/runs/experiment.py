@@ -15,6 +15,8 @@ An experiment is a TOML file, given by path or by the name of one shipped in
                                      # measured against (exact | heyoka[:...] | rebound[:...] | none)
     section = 10000                  # optional: the first N crossings of the problem's Poincaré
                                      # section up to the horizon, instead of samples
+    load = ["defs.toml"]             # optional: user definitions (suite/cell/user), relative to
+                                     # the experiment file
 
     [[cells]]                        # a group; the cells are problems x methods x vary values
     label    = "symplectic Euler"    # optional, shown in the summary
@@ -50,97 +52,17 @@ from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 
-from gnibench.suite.cell.cellspec import CellSpec
 from gnibench.suite.cell.spec import structure, with_options
 from gnibench.suite.foundation.budgets import INT_LIMIT, check_count
 from gnibench.suite.foundation.errors import UserError, unknown
 from gnibench.suite.foundation.params import format_float
+from gnibench.suite.runs.cell import Cell
 
 TOP_KEYS = ("name", "title", "reference", "description", "t_end", "steps", "every", "dt_out",
-            "metrics", "reference_solution", "section", "cells", "scale", "figure")
+            "metrics", "reference_solution", "section", "cells", "scale", "figure", "load")
 GROUP_KEYS = ("label", "problems", "methods", "t_end", "steps", "every", "dt_out", "metrics",
               "reference_solution", "section", "vary", "points", "scale")
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]*$")
-
-
-@dataclass(frozen=True)
-class Cell:
-    """One problem x method x horizon of an experiment: the unit of work of the runner.
-
-    ``spec`` is the typed cell (:class:`~gnibench.suite.cell.cellspec.CellSpec`: the parsed
-    problem and method, horizon, sampling, reference solution and chosen metrics), made once when
-    the experiment is read; ``id``, ``group`` and ``label`` place it in the experiment. The other
-    attributes are the canonical texts and numbers the tables show: ``problem``/``method`` the
-    canonical specs, ``metrics`` the canonical texts of the chosen metrics (beside the default
-    ones), ``reference`` the canonical text of the chosen reference solution (``exact``,
-    ``heyoka:precision=...,tol=...``, ``rebound:tol=...`` or ``none``), None for the default (the
-    exact solution where the problem has one).
-    """
-
-    id: int
-    group: int
-    label: str
-    spec: CellSpec
-
-    @property
-    def problem(self) -> str:
-        return self.spec.problem_text
-
-    @property
-    def method(self) -> str:
-        return self.spec.method_text
-
-    @property
-    def method_kind(self) -> str:
-        return self.spec.kind
-
-    @property
-    def h(self) -> float:
-        return self.spec.h
-
-    @property
-    def steps(self) -> int | None:
-        return self.spec.steps
-
-    @property
-    def t_end(self) -> float | None:
-        return self.spec.t_end
-
-    @property
-    def every(self) -> int:
-        return self.spec.every
-
-    @property
-    def nsteps(self) -> int:
-        return self.spec.nsteps
-
-    @property
-    def t_final(self) -> float:
-        return self.spec.t_final
-
-    @property
-    def metrics(self) -> tuple[str, ...]:
-        return self.spec.metric_texts
-
-    @property
-    def dt_out(self) -> float | None:
-        """The time grid (suite/cell/timegrid.py); the specs stay as given, but for an engine's."""
-        return self.spec.dt_out
-
-    @property
-    def reference(self) -> str | None:
-        return self.spec.reference_text
-
-    @property
-    def section(self) -> int | None:
-        """Crossings of the problem's Poincaré section (suite/cell/sections.py)."""
-        return self.spec.section
-
-    def described(self) -> dict:
-        """What the tables' metadata records of the cell (and a redraw compares)."""
-        return {"cell": self.id, "problem": self.problem, "method": self.method,
-                "steps": self.steps, "t_end": self.t_end, "every": self.every,
-                "dt_out": self.dt_out, "reference": self.reference, "section": self.section}
 
 
 @dataclass(frozen=True)
@@ -175,7 +97,7 @@ def load_experiment(name_or_path: str | Path, scale: str = "paper") -> Experimen
         if not path.is_file():
             raise UserError(f"no experiment file {arg!r}")
         try:
-            text, source = path.read_text(encoding="utf-8"), path.name
+            text, source, base = path.read_text(encoding="utf-8"), path.name, path.parent
         except UnicodeDecodeError as e:
             raise UserError(f"experiment file {arg!r} is not UTF-8 text (byte {e.start}); allowed: "
                             f"a TOML file in UTF-8") from None
@@ -185,13 +107,15 @@ def load_experiment(name_or_path: str | Path, scale: str = "paper") -> Experimen
         known = shipped()
         if arg not in known:
             raise unknown("experiment", arg, known)
-        text, source = known[arg], f"{arg}.toml"
-    return parse_experiment(text, source, scale)
+        text, source, base = known[arg], f"{arg}.toml", None
+    return parse_experiment(text, source, scale, base)
 
 
-def parse_experiment(text: str, source: str, scale: str = "paper") -> Experiment:
+def parse_experiment(text: str, source: str, scale: str = "paper",
+                     base: Path | None = None) -> Experiment:
     """Validate an experiment's TOML text at a scale and expand its cells (``source`` names it
-    in errors); a ``[figure]`` section is validated against the cells
+    in errors; ``base``: the directory its ``load`` paths are relative to, default the working
+    directory); a ``[figure]`` section is validated against the cells
     (:mod:`gnibench.suite.runs.figure_spec`)."""
     from gnibench.suite.runs.scales import at_scale, check_scale, scales_stated
 
@@ -201,6 +125,7 @@ def parse_experiment(text: str, source: str, scale: str = "paper") -> Experiment
     except tomllib.TOMLDecodeError as e:
         raise UserError(f"{source}: not valid TOML: {e}") from None
     _keys(doc, TOP_KEYS, source)
+    _load(doc.get("load"), source, base)
     stated = scales_stated(doc)
     doc = at_scale(doc, scale, source)
     name = _text(doc, "name", source, required=True)
@@ -237,6 +162,19 @@ def parse_experiment(text: str, source: str, scale: str = "paper") -> Experiment
                               scale=scale, where=f"{source}: figure")
     return Experiment(name, title, reference, description, source, text, tuple(cells), scale,
                       figure, stated)
+
+
+def _load(paths, where: str, base: Path | None) -> None:
+    """The experiment's user definitions (``load = ["defs.toml"]``), before its cells."""
+    from gnibench.suite.cell.user.loader import load
+
+    if paths is None:
+        return
+    if not isinstance(paths, list) or not all(isinstance(p, str) and p.strip() for p in paths):
+        raise UserError(f"{where}: bad load = {paths!r}; allowed: a list of paths of definitions "
+                        "files, relative to the experiment file")
+    for p in paths:
+        load(Path(base or ".") / p)
 
 
 def _keys(table: dict, allowed: tuple[str, ...], where: str) -> None:
