@@ -34,7 +34,7 @@ import numpy as np
 from gnibench.suite.foundation.errors import UserError
 
 MAX_CHARS = 1000
-MAX_DEPTH = 32
+MAX_DEPTH = 100
 MAX_NODES = 400
 MAX_INT = 2 ** 53
 
@@ -135,10 +135,9 @@ def _fold_constants(node: ast.AST, bad) -> bool:
     """Evaluate every part without names once (in floats); True when ``node`` has no names."""
     if isinstance(node, ast.Name):
         return False
-    if isinstance(node, ast.Call):
-        constant = all(_fold_constants(a, bad) for a in node.args)
-    else:
-        constant = all(_fold_constants(c, bad) for c in ast.iter_child_nodes(node))
+    children = node.args if isinstance(node, ast.Call) else list(ast.iter_child_nodes(node))
+    folded = [_fold_constants(c, bad) for c in children]     # every child, no short cut
+    constant = all(folded)
     if constant and not isinstance(node, ast.Constant) and isinstance(node, ast.expr):
         try:
             value = _eval(node, {}, strict=True)

@@ -157,7 +157,7 @@ def error_line(record: type[Record], error: dict, where: str) -> str:
         return f"{head}: missing key {leaf!r}" + (f" ({allowed})" if allowed else "")
     if kind in ("value_error", "assertion_error"):
         message = str(error.get("ctx", {}).get("error", error["msg"]))
-        plain = not leaf or message.startswith((leaf, "bad "))
+        plain = not leaf or message.startswith((leaf, f"bad {leaf}"))
         return f"{head}: {message}" if plain else f"{head}: {leaf}: {message}"
     detail = f"; allowed: {allowed}" if allowed else f" ({error['msg'].lower()})"
     return f"{head}: bad {leaf or 'value'} = {short(error.get('input'))}{detail}"
@@ -217,7 +217,7 @@ def allowed_text(info) -> str:
     extra = info.json_schema_extra if isinstance(info.json_schema_extra, dict) else {}
     if extra.get("allowed"):
         return extra["allowed"]
-    for meta in info.metadata:
+    for meta in reversed(info.metadata):          # the outermost Annotated says it best
         if isinstance(meta, Allowed):
             return meta.text
     return _type_words(info.annotation)
@@ -227,7 +227,7 @@ def _type_words(tp) -> str:
     origin, args = typing.get_origin(tp), typing.get_args(tp)
     if origin is Annotated:
         found = [m.text for m in args[1:] if isinstance(m, Allowed)]
-        return found[0] if found else _type_words(args[0])
+        return found[-1] if found else _type_words(args[0])
     if origin is typing.Literal:
         return " | ".join(str(a) for a in args)
     if origin in (typing.Union, types.UnionType):
@@ -245,10 +245,9 @@ def _type_words(tp) -> str:
 def markdown_table(record: type[Record], prefix: str = "") -> str:
     """The keys of a record as a Markdown table: key, allowed values, default, meaning."""
     rows = ["| key | allowed | default | meaning |", "|---|---|---|---|"]
-    for name, info in fields(record).items():
-        if info.exclude:
-            continue
-        default = ("required" if info.is_required() else "" if info.default in (None, "", (), [])
+    keys = sorted(fields(record).items(), key=lambda item: not item[1].is_required())
+    for name, info in keys:
+        default = ("required" if info.is_required() else "" if info.default in (None, "", (), [], {})
                    else f"`{_toml(info.default)}`")
         rows.append(f"| `{prefix}{name}` | {_cell(allowed_text(info))} | {default} | "
                     f"{_cell(info.description or '')} |")

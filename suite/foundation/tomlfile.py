@@ -5,7 +5,8 @@ A file of more than :data:`MAX_CHARS` characters, or whose arrays and inline tab
 :data:`MAX_NESTING` levels deep, is one :class:`UserError` line; so is invalid TOML. The nesting
 is counted by a small scanner that skips strings (basic, literal, multi-line) and comments, so an
 array nested 2000 deep is refused without any recursion; RecursionError and MemoryError from the
-parser are caught as well.
+parser are caught as well, and the parsed document is at most :data:`MAX_DEPTH` levels deep
+(dotted keys ``a.b.c...`` nest tables without any bracket).
 """
 from __future__ import annotations
 
@@ -14,7 +15,8 @@ import tomllib
 from gnibench.suite.foundation.errors import UserError
 
 MAX_CHARS = 4_000_000
-MAX_NESTING = 24
+MAX_NESTING = 24          # brackets of arrays and inline tables, counted in the text
+MAX_DEPTH = 32            # levels of the parsed document (tables, dotted keys, arrays)
 
 
 def nesting(text: str) -> int:
@@ -62,9 +64,28 @@ def load_toml(text: str, source: str) -> dict:
         raise UserError(f"{source}: arrays or tables nested {depth} deep; allowed: at most "
                         f"{MAX_NESTING} levels")
     try:
-        return tomllib.loads(text)
+        doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         raise UserError(f"{source}: not valid TOML: {e}") from None
     except (RecursionError, MemoryError) as e:
         raise UserError(f"{source}: not valid TOML: {type(e).__name__} (nested too deep or too "
                         f"large)") from None
+    depth = _depth(doc)
+    if depth > MAX_DEPTH:                   # dotted keys nest tables without brackets: a.b.c...
+        raise UserError(f"{source}: tables or arrays nested more than {MAX_DEPTH} deep; allowed: "
+                        f"at most "
+                        f"{MAX_DEPTH} levels")
+    return doc
+
+
+def _depth(doc) -> int:
+    """The nesting depth of a parsed document, counted without recursion."""
+    deepest, stack = 0, [(doc, 1)]
+    while stack:
+        value, depth = stack.pop()
+        deepest = max(deepest, depth)
+        if depth > MAX_DEPTH:
+            break
+        children = value.values() if isinstance(value, dict) else value
+        stack.extend((v, depth + 1) for v in children if isinstance(v, (dict, list)))
+    return deepest

@@ -48,7 +48,7 @@ from typing import Annotated, Literal
 
 from gnibench.suite.foundation import expressions
 from gnibench.suite.foundation.errors import UserError
-from gnibench.suite.foundation.records import Line, NonEmptyLine, Record, Text, key, validate
+from gnibench.suite.foundation.records import Allowed, Line, NonEmptyLine, Record, Text, key, validate
 from gnibench.suite.foundation.tomlfile import load_toml
 from pydantic import AfterValidator, Field, PrivateAttr, model_validator
 
@@ -59,7 +59,10 @@ _AT = re.compile(r"^(last|max_abs|min|max|[A-Za-z_][A-Za-z0-9_]*=[-+]?(\d+\.?\d*
 
 
 def _expression(text: str) -> str:
-    expressions.parse(text, "expression")         # bounded; refused here, before any run
+    try:
+        expressions.parse(text, "expression")     # bounded; refused here, before any run
+    except UserError as e:
+        raise ValueError(str(e).removeprefix("expression: ")) from None
     return text
 
 
@@ -70,7 +73,8 @@ def _at(text: str) -> str:
     return text
 
 
-Expression = Annotated[str, Field(max_length=expressions.MAX_CHARS), AfterValidator(_expression)]
+Expression = Annotated[str, Allowed("a safe expression (suite/foundation/expressions.py)"),
+                       Field(max_length=expressions.MAX_CHARS), AfterValidator(_expression)]
 Name = Annotated[str, Field(pattern=r"^[A-Za-z_][A-Za-z0-9_]*$", max_length=64)]
 
 
@@ -127,7 +131,7 @@ class Claim(Record):
     all_of: Annotated[list[NonEmptyLine], Field(max_length=200), AfterValidator(tuple)] = key(
         (), "an aggregate: reproduced when all these claims are", "a list of claim ids")
     not_checkable: Text = key("", "why it cannot be checked")
-    scale: Literal["", "paper"] = key("", "paper: not checkable at the quick scale")
+    scale: Literal["", "paper"] = key("", "paper: not checkable at the quick scale", "paper")
     _source: str = PrivateAttr("")
 
     @property

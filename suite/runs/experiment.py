@@ -30,7 +30,7 @@ from gnibench.suite.foundation.budgets import check_count
 from gnibench.suite.foundation.errors import UserError, unknown
 from gnibench.suite.foundation.params import format_float
 from gnibench.suite.foundation.records import validate
-from gnibench.suite.foundation.tomlfile import load_toml
+from gnibench.suite.foundation.tomlfile import MAX_CHARS, load_toml
 from gnibench.suite.runs.experiment_schema import ExperimentFile, Group
 
 
@@ -102,6 +102,9 @@ def load_experiment(name_or_path: str | Path, scale: str = "paper") -> Experimen
     if path.suffix == ".toml" or "/" in arg or path.is_file():
         if not path.is_file():
             raise UserError(f"no experiment file {arg!r}")
+        if path.stat().st_size > 4 * MAX_CHARS:            # before reading it into memory
+            raise UserError(f"experiment file {arg!r} is {path.stat().st_size} bytes; allowed: "
+                            f"a TOML file of at most {MAX_CHARS} characters")
         try:
             text, source = path.read_text(encoding="utf-8"), path.name
         except UnicodeDecodeError as e:

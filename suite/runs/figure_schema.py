@@ -98,7 +98,8 @@ class Select(Record):
 
 
 class Zoom(Record):
-    of: Annotated[int, Field(ge=0, le=63)] = key(doc="the index of the magnified panel")
+    of: Annotated[int, Field(ge=0, le=63)] = key(doc="the index of the magnified panel",
+                                                 allowed="the index of another panel (0 to 63)")
     mark: bool = key(True, "mark the window in that panel")
 
 
@@ -146,7 +147,8 @@ class FieldLayer(Record):
     xrange: Interval = key(doc="the grid's x range")
     yrange: Interval = key(doc="the grid's y range")
     n: Annotated[int, Field(ge=2, le=MAX_GRID)] | None = key(
-        None, "grid points per axis (default 200 contour, 21 quiver)")
+        None, "grid points per axis (default 200 contour, 21 quiver)",
+        f"an integer from 2 to {MAX_GRID}")
     levels: Numbers | None = key(None, "contour levels")
     through: Annotated[list[Point], Allowed("a list of at most 1000 [x, y] points"),
                        Field(min_length=1, max_length=1000)] | None = key(
@@ -195,15 +197,15 @@ class Row(Record):
     label: NonEmptyLine = key(doc="the row label")
     cells: Select = key(doc="the cells of the row", allowed="{group = g, index = i} or "
                                                              "{cell = c}")
-    book: Annotated[list[Line], Field(max_length=32)] = key(doc="the seed's entries, one per "
-                                                                "column")
+    book: Annotated[list[Line], Field(max_length=32)] = key(
+        doc="the seed's entries, one per column", allowed="one-line texts, one per column")
 
 
 class Table(Record):
     """``[figure.table]``: growth exponents in t and exponents in h, against the seed's."""
 
     columns: Annotated[list[Column], Field(min_length=1, max_length=32)] = key(
-        doc="{of = ..., label = ...} per column")
+        doc="{of = ..., label = ...} per column", allowed="1 to 32 tables {of, label}")
     rows: Annotated[list[Row], Field(min_length=1, max_length=200)] = key(
         doc="[[figure.table.rows]]", allowed="[[figure.table.rows]] tables")
     zero_below: Number = key(0.0, "a round-off threshold")
