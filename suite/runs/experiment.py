@@ -24,14 +24,16 @@ import itertools
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from gnibench.suite.cell.spec import parse_item, split_method
 from gnibench.suite.foundation.budgets import check_count
 from gnibench.suite.foundation.errors import UserError, unknown
 from gnibench.suite.foundation.params import format_float
-from gnibench.suite.foundation.records import validate
 from gnibench.suite.foundation.tomlfile import MAX_CHARS, load_toml
-from gnibench.suite.runs.experiment_schema import ExperimentFile, Group
+
+if TYPE_CHECKING:          # the schema (pydantic) is imported when a file is parsed, not by workers
+    from gnibench.suite.runs.experiment_schema import ExperimentFile, Group
 
 
 @dataclass(frozen=True)
@@ -124,6 +126,8 @@ def parse_experiment(text: str, source: str, scale: str = "paper") -> Experiment
     """Validate an experiment's TOML text at a scale and expand its cells (``source`` names it
     in errors); a ``[figure]`` section is validated against the cells
     (:mod:`gnibench.suite.runs.figure_spec`)."""
+    from gnibench.suite.foundation.records import validate
+    from gnibench.suite.runs.experiment_schema import ExperimentFile
     from gnibench.suite.runs.scales import at_scale, check_scale, scales_stated
 
     check_scale(scale)

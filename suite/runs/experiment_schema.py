@@ -15,7 +15,6 @@ import math
 import re
 from typing import Annotated, Any, Literal
 
-from gnibench.suite.cell.timegrid import check_dt_out
 from gnibench.suite.foundation.params import format_float
 from gnibench.suite.foundation.records import (
     MAX_ITEMS,
@@ -98,8 +97,14 @@ def _vary(table: dict) -> dict[str, dict[str, list[str]]]:
 Specs = Annotated[list[Line], Allowed(SPECS), Field(min_length=1, max_length=MAX_ITEMS)]
 Metrics = Annotated[list[Line], Allowed(METRICS), Field(max_length=64), AfterValidator(_metrics)]
 Reference = Annotated[NonEmptyLine, Allowed(REFERENCES)]
-DtOut = Annotated[float, Allowed("a finite number > 0"), AfterValidator(via(
-    lambda v: check_dt_out(v, "dt_out =")))]
+def _dt_out(value: float) -> float:
+    """The one rule of a time grid (:func:`gnibench.suite.cell.timegrid.check_dt_out`)."""
+    from gnibench.suite.cell.timegrid import check_dt_out
+
+    return via(lambda v: check_dt_out(v, "dt_out ="))(value)
+
+
+DtOut = Annotated[float, Allowed("a finite number > 0"), AfterValidator(_dt_out)]
 Vary = Annotated[dict[str, Any], Allowed(VARY), Field(max_length=64), AfterValidator(_vary)]
 Pair = Annotated[list[Number], Allowed("two numbers [a, b]"), Field(min_length=2, max_length=2)]
 PointList = Annotated[list[Annotated[list[Number], Field(min_length=1, max_length=16)]],

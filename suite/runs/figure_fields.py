@@ -23,12 +23,15 @@ boundary of the domain.
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 from gnibench.suite.foundation import expressions
 from gnibench.suite.foundation.errors import UserError, unknown
 from gnibench.suite.foundation.records import short
-from gnibench.suite.runs.figure_schema import FieldLayer
+
+if TYPE_CHECKING:
+    from gnibench.suite.runs.figure_schema import FieldLayer
 
 
 def parse_field(field: FieldLayer, where: str) -> dict:

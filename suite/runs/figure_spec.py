@@ -2,8 +2,10 @@
 
 Validated with the experiment, before anything runs, against its expanded cells; the result is a
 plain JSON-able dict (the *normalized figure*) that the runner stores in the tables' metadata, so
-the drawing (:mod:`gnibench.reports.figures`) reads only the results directory. Schema (also in
-``suite/experiments/README.md``)::
+the drawing (:mod:`gnibench.reports.figures`) reads only the results directory. The keys, their
+types, bounds and sizes are the records of :mod:`gnibench.suite.runs.figure_schema` (validated with
+the whole experiment file; tables in ``suite/experiments/README.md``); what is checked here needs
+the cells: selections, columns, label placeholders, sample times, zoom targets. In short::
 
     [figure]
     number  = "Fig 1.4"            # as in the seed ("Fig 2.3", "Table 2.1")

@@ -39,7 +39,6 @@ import copy
 
 import numpy as np
 from gnibench.suite.foundation.errors import UserError, unknown
-from gnibench.suite.runs.experiment_schema import MAX_POINTS, Circle, Points, Polygon
 
 SCALES = ("paper", "quick")
 
@@ -89,8 +88,9 @@ def _override(table: dict, changes: dict) -> None:
 
 # -- point sets ------------------------------------------------------------------------------------
 
-def planned_points(points: Points | None) -> int:
-    """The number of points a point set makes, counted before its points are made."""
+def planned_points(points) -> int:
+    """The number of points of a point set (a validated ``Points`` record, or None), counted
+    before its points are made."""
     if points is None:
         return 1
     if points.list_ is not None:
@@ -100,7 +100,7 @@ def planned_points(points: Points | None) -> int:
     return n if n is not None else 1
 
 
-def point_options(points: Points, where: str) -> list[dict[str, float]]:
+def point_options(points, where: str) -> list[dict[str, float]]:
     """The problem options of each point of a validated point set, in order."""
     where = f"{where}: points"
     options = points.options
@@ -112,6 +112,8 @@ def point_options(points: Points, where: str) -> list[dict[str, float]]:
         spec = points.circle or points.polygon
         n = spec.n if spec.n is not None else points.n
         if n is None:
+            from gnibench.suite.runs.experiment_schema import MAX_POINTS
+
             raise UserError(f"{where}.{shape}: missing n; allowed: an integer from 3 to "
                             f"{MAX_POINTS} (in the {shape} or the point set)")
         coords = _circle(spec, n, dim, where) if shape == "circle" else _polygon(spec, n, dim,
@@ -127,14 +129,14 @@ def _coords(value, dim: int, where: str) -> np.ndarray:
     return np.array(value, dtype=float)
 
 
-def _circle(spec: Circle, n: int, dim: int, where: str) -> np.ndarray:
+def _circle(spec, n: int, dim: int, where: str) -> np.ndarray:
     if dim != 2:
         raise UserError(f"{where}.circle: needs two options (got {dim})")
     angle = 2 * np.pi * np.arange(n) / n
     return np.array(spec.center) + spec.radius * np.column_stack([np.cos(angle), np.sin(angle)])
 
 
-def _polygon(spec: Polygon, n: int, dim: int, where: str) -> np.ndarray:
+def _polygon(spec, n: int, dim: int, where: str) -> np.ndarray:
     """n points evenly spaced by arc length along the closed polygon, from its first vertex."""
     vertices = _coords(spec.vertices, dim, f"{where}.polygon.vertices")
     if len(vertices) < 3:
