@@ -74,7 +74,7 @@ Ints = Annotated[Any, Allowed("an integer from 0 or a list of them"), AfterValid
 Interval = Annotated[list[Number], Allowed("two numbers [a, b] with a < b"),
                      Field(min_length=2, max_length=2), AfterValidator(_ordered)]
 Point = Annotated[list[Number], Field(min_length=2, max_length=2)]
-Numbers = Annotated[list[Number], Allowed("a non-empty list of at most 1000 numbers"),
+Numbers = Annotated[list[Number], Allowed("a non-empty list of at most 1000 finite numbers"),
                     Field(min_length=1, max_length=1000)]
 
 
