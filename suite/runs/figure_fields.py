@@ -34,12 +34,16 @@ if TYPE_CHECKING:
     from gnibench.suite.runs.figure_schema import FieldLayer
 
 
-def parse_field(field: FieldLayer, where: str) -> dict:
-    """Check a validated field record against its problem; the normalized field (levels resolved,
+def parse_field(field: FieldLayer | dict, where: str) -> dict:
+    """Check a field record (or table) against its problem; the normalized field (levels resolved,
     fixed values complete: numbers, or checked expressions kept as text)."""
     from gnibench.suite.cell.spec import parse_problem
+    from gnibench.suite.foundation.records import validate
     from gnibench.suite.metrics.base import integral_names
+    from gnibench.suite.runs.figure_schema import FieldLayer
 
+    if isinstance(field, dict):                   # a table not validated yet
+        field = validate(FieldLayer, field, where)
     try:
         problem = parse_problem(field.problem)
     except UserError as e:

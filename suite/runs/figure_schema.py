@@ -122,7 +122,8 @@ class Curve(Record):
     linewidth: Annotated[float, Field(gt=0, le=10)] = key(1.2, "points",
                                                           allowed="0 < width <= 10")
     where: Annotated[dict[Line, Number], Field(max_length=16)] = key(
-        {}, "only the samples whose columns have these values", "a table {column = number}")
+        {}, "only the samples whose columns have these values",
+        "a table {column = finite number}")
 
     @model_validator(mode="after")
     def _style(self):
