@@ -1,0 +1,126 @@
+"""scipy's solve_ivp solvers as contestants (methods/scipy_methods.py, methods/engines/scipy.py).
+
+* The engine is solve_ivp: the same samples (bit for bit), nfev and njev as ``solve_ivp`` called
+  directly with the problem's compiled field, and ``steps`` = its number of accepted steps.
+* Against Kepler's exact solution the global error follows the tolerance.
+* Statuses, refusals (modifiers, post_step problems), the step budget.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from gnibench.methods import METHODS
+from gnibench.suite.cell.compiled import problem_kernel
+from gnibench.suite.cell.solve import solve
+from gnibench.suite.cell.spec import prepare
+from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.status import Status
+from scipy.integrate import solve_ivp
+
+PERIOD = 2 * math.pi                       # kepler-2d from its default start: a = 1
+SOLVERS = {"rk45": "RK45", "rk23": "RK23", "dop853": "DOP853", "radau": "Radau", "bdf": "BDF",
+           "lsoda": "LSODA"}
+
+
+def direct(problem: str, solver: str, t_eval, tol: float, with_jac: bool, t_end=None):
+    """solve_ivp called as a user would, on the problem's compiled field (and Jacobian)."""
+    bound, _ = prepare(problem, "rk4")
+    pk = problem_kernel(bound)
+    f, J, par = pk.kernel.base_f, pk.kernel.base_jac, pk.par
+    n = bound.record.dim
+
+    def jac(t, y):
+        out = np.zeros((n, n))
+        J(tuple(y), par, out)
+        return out
+
+    y0 = np.array(bound.record.y0(bound.values), dtype=float)
+    kw = {"jac": jac} if with_jac else {}
+    t_end = t_eval[-1] if t_end is None else t_end
+    return solve_ivp(lambda t, y: f(tuple(y), par), (0.0, t_end), y0, method=solver,
+                     t_eval=t_eval, rtol=tol, atol=tol, **kw)
+
+
+def test_dop853_is_solve_ivp_on_kepler():
+    """The acceptance check of issue 16: scipy-dop853 at rtol = atol = 1e-10 over one period."""
+    traj = solve("kepler-2d", f"scipy-dop853:rtol=1e-10,atol=1e-10,dt_out={PERIOD / 10!r}",
+                 t_end=PERIOD)
+    assert traj.status is Status.OK
+    sol = direct("kepler-2d", "DOP853", traj.t, 1e-10, with_jac=False)
+    assert sol.success
+    assert traj.nfev[-1] == sol.nfev
+    assert np.array_equal(traj.t, sol.t)
+    assert np.array_equal(traj.y, sol.y.T)
+    free = direct("kepler-2d", "DOP853", None, 1e-10, with_jac=False, t_end=PERIOD)
+    assert traj.steps[-1] == len(free.t) - 1          # accepted steps (solve_ivp keeps each end)
+
+
+@pytest.mark.parametrize("name", list(SOLVERS))
+def test_every_solver_is_solve_ivp(name):
+    tol = 1e-7
+    traj = solve("kepler-2d", f"scipy-{name}:rtol={tol},atol={tol},dt_out=0.5", t_end=PERIOD)
+    assert traj.status is Status.OK
+    sol = direct("kepler-2d", SOLVERS[name], traj.t, tol, with_jac=name in ("radau", "bdf", "lsoda"))
+    assert (traj.nfev[-1], traj.njev[-1]) == (sol.nfev, sol.njev)
+    assert np.array_equal(traj.y, sol.y.T)
+    # cumulative counters: non-decreasing, 0 steps at t = 0
+    assert traj.steps[0] == 0 and np.all(np.diff(traj.steps) >= 0) and np.all(np.diff(traj.nfev) >= 0)
+    assert traj.provenance["engine"]["solver"] == SOLVERS[name]
+
+
+@pytest.mark.parametrize("name", list(SOLVERS))
+def test_global_error_follows_the_tolerance(name):
+    """Against Kepler's exact solution (the default reference), one period at e = 0.6: the error is
+    within 10^4 tolerances (the global amplification of the local error over the orbit) and falls
+    by at least 100 when the tolerance falls by 10^4."""
+    errs = {}
+    for tol in (1e-6, 1e-10):
+        traj = solve("kepler-2d", f"scipy-{name}:rtol={tol},atol={tol},dt_out=0.5", t_end=PERIOD)
+        assert traj.status is Status.OK and traj.reference.describe["backend"] == "exact"
+        errs[tol] = float(np.max(np.linalg.norm(traj.y - traj.reference.y, axis=1)))
+        assert errs[tol] < 1e4 * tol, (name, tol, errs[tol])
+    assert errs[1e-10] < errs[1e-6] / 100, errs
+
+
+def test_step_budget_is_a_status():
+    traj = solve("kepler-2d", "scipy-rk45:rtol=1e-10,atol=1e-10,max_steps=20", t_end=PERIOD)
+    assert traj.status is Status.MAX_STEPS and "max_steps=20" in traj.reason
+    assert traj.steps[-1] <= 20 and len(traj.t) >= 1 and traj.t[-1] < PERIOD
+
+
+@pytest.mark.parametrize("name", ["rk45", "radau", "lsoda"])
+def test_collision_is_a_failure_not_a_crash(name):
+    """A radial Kepler orbit (p = 0) falls into the singularity at t = pi/(2 sqrt 2) from r = 1:
+    the solvers stop there (LSODA keeps shrinking its step and stops at the step budget)."""
+    traj = solve("kepler-2d:p10=0,p20=0,q10=1,q20=0",
+                 f"scipy-{name}:rtol=1e-8,atol=1e-8,max_steps=3000", t_end=2.0)
+    assert traj.status in (Status.STEP_TOO_SMALL, Status.NONFINITE, Status.MAX_STEPS), traj.status
+    assert traj.reason and np.all(np.isfinite(traj.y))
+    assert traj.t[-1] < math.pi / (2 * math.sqrt(2))
+
+
+def test_modifiers_and_post_step_problems_are_refused():
+    with pytest.raises(UserError, match="modifiers"):
+        prepare("kepler-2d", "scipy-rk45+observer:on=H/L")
+    with pytest.raises(UserError, match="post_step"):
+        prepare("geodesic-genus2", "scipy-dop853")
+
+
+def test_records_are_external_and_listed():
+    for name in SOLVERS:
+        rec = METHODS[f"scipy-{name}"]
+        assert rec.run is not None and rec.grid_param == "dt_out"
+        assert getattr(rec, "kind", "external") == "external"
+        assert {"rtol", "atol", "max_step", "first_step", "dt_out"} <= {p.name for p in rec.params}
+
+
+def test_options_reach_the_solver():
+    """max_step bounds every step; first_step is the first step (both as solve_ivp takes them)."""
+    traj = solve("kepler-2d", "scipy-rk45:rtol=1e-6,atol=1e-6,max_step=0.05,dt_out=0.5",
+                 t_end=PERIOD)
+    assert traj.steps[-1] >= PERIOD / 0.05
+    a = solve("kepler-2d", "scipy-rk45:rtol=1e-6,atol=1e-6,first_step=1e-4", t_end=PERIOD)
+    b = solve("kepler-2d", "scipy-rk45:rtol=1e-6,atol=1e-6", t_end=PERIOD)
+    assert not np.array_equal(a.y[-1], b.y[-1])
