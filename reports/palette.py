@@ -11,7 +11,8 @@ from __future__ import annotations
 
 LINESTYLES = ("-", "--", ":", "-.", (0, (5, 1, 1, 1)), (0, (1, 3)))
 MARKERS = {"fixed": "s", "adaptive": "o", "external": "^"}
-EXTERNAL = ("heyoka-taylor", "rebound-ias15", "rebound-whfast")
+EXTERNAL = ("heyoka-taylor", "rebound-ias15", "rebound-whfast", "scipy-rk45", "scipy-rk23",
+            "scipy-dop853", "scipy-radau", "scipy-bdf", "scipy-lsoda")
 
 
 def colour(base: str) -> str:
