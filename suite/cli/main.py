@@ -157,49 +157,29 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def _solve(a) -> int:
-    from gnibench.suite.cell.driver import Interrupted
-    from gnibench.suite.cell.solve import solve
-    from gnibench.suite.metrics.compute import apply, parse_metrics
     from gnibench.suite.runs.progress import SolveProgress
-    from gnibench.suite.runs.storage import write_result
+    from gnibench.suite.runs.solving import check_options, solve_output
+    from gnibench.suite.runs.storage import write_frame
 
     if a.format == "parquet" and a.output is None:
         raise UserError("--format parquet needs -o FILE (binary output is not written to stdout)")
     if a.output is not None:
         check_output_file(a.output)
-    choices = parse_metrics(a.metrics or "")
-    if a.section is not None:
-        if a.every != 1:
-            raise UserError("--every does not apply with --section (the section points are written)")
-        if a.reference is not None:
-            raise UserError("--reference does not apply with --section (no global error is "
-                            "written)")
-        if a.dt_out is not None:
-            raise UserError("--dt-out does not apply with --section (the section points are "
-                            "written)")
-    if a.section is None and a.metrics:           # eta: samples at whole periods t = nT
-        from gnibench.suite.cell.spec import prepare
-        from gnibench.suite.metrics.compute import period_grid
-
-        a.dt_out = period_grid(choices, *prepare(a.problem, a.method), a.every, a.dt_out)
+    check_options(a.every, a.section, a.reference, a.dt_out)
     progress = SolveProgress(f"{a.problem} {a.method}")
-    interrupted = None
     try:
-        traj = solve(a.problem, a.method, steps=a.steps, t_end=a.t_end, every=a.every,
-                     reference=a.reference, section=a.section, dt_out=a.dt_out,
-                     progress=progress)
-    except Interrupted as e:              # keep what was computed, then exit 130
-        traj, interrupted = e.partial, e
+        out = solve_output(a.problem, a.method, steps=a.steps, t_end=a.t_end, every=a.every,
+                           dt_out=a.dt_out, section=a.section, reference=a.reference,
+                           metrics=a.metrics or "", progress=progress)
     finally:
         progress.close()
-    metrics, skipped = apply(traj, choices)
-    write_result(traj, metrics, a.format, a.output, sys.stdout)
-    if interrupted is not None:
-        raise interrupted
-    for name, why in skipped.items():
+    write_frame(out.frame, out.meta, a.format, a.output, sys.stdout)
+    if out.interrupted is not None:       # the samples so far are written, then exit 130
+        raise out.interrupted
+    for name, why in out.skipped.items():
         print(f"gnibench: metric {name} does not apply: {why}", file=sys.stderr)
-    if traj.reason:
-        print(f"gnibench: {traj.status}: {traj.reason}", file=sys.stderr)
+    if out.traj.reason:
+        print(f"gnibench: {out.traj.status}: {out.traj.reason}", file=sys.stderr)
     return 0
 
 
