@@ -18,6 +18,7 @@ from gnibench.suite.cell.spec import prepare
 from gnibench.suite.foundation.errors import UserError
 from gnibench.suite.foundation.status import Status
 from scipy.integrate import solve_ivp
+from threadpoolctl import threadpool_limits
 
 PERIOD = 2 * math.pi                       # kepler-2d from its default start: a = 1
 SOLVERS = {"rk45": "RK45", "rk23": "RK23", "dop853": "DOP853", "radau": "Radau", "bdf": "BDF",
@@ -39,8 +40,9 @@ def direct(problem: str, solver: str, t_eval, tol: float, with_jac: bool, t_end=
     y0 = np.array(bound.record.y0(bound.values), dtype=float)
     kw = {"jac": jac} if with_jac else {}
     t_end = t_eval[-1] if t_end is None else t_end
-    return solve_ivp(lambda t, y: f(tuple(y), par), (0.0, t_end), y0, method=solver,
-                     t_eval=t_eval, rtol=tol, atol=tol, **kw)
+    with threadpool_limits(1, user_api="blas"):      # as the engine runs (Radau's LU rounds
+        return solve_ivp(lambda t, y: f(tuple(y), par), (0.0, t_end), y0,    # by thread count)
+                         method=solver, t_eval=t_eval, rtol=tol, atol=tol, **kw)
 
 
 def test_dop853_is_solve_ivp_on_kepler():

@@ -60,6 +60,22 @@ def field_functions(kernel, n: int):
     return fun, jac
 
 
+_controller = None
+
+
+def one_blas_thread():
+    """BLAS and LAPACK on one thread while the solver runs (threadpoolctl). Radau's complex LU
+    (LAPACK zgetrf/zgetrs through OpenBLAS) rounds differently with 1 and 2 threads, and a Dask
+    worker runs with one while this process and a local pool run with one per core: fixed at one,
+    a cell gives the same bits whatever the executor (the matrices are N x N, N <= 36)."""
+    global _controller
+    if _controller is None:
+        from threadpoolctl import ThreadpoolController
+
+        _controller = ThreadpoolController()
+    return _controller.limit(limits=1, user_api="blas")
+
+
 def solver_options(solver: str, rtol: float, atol: float, max_step: float, first_step: float,
                    jac) -> dict:
     """The keyword arguments solve_ivp receives (``max_step`` 0: unbounded, ``first_step`` 0: the
@@ -98,7 +114,7 @@ def scipy_propagate(problem_bound, t: np.ndarray, solver: str, kernel, rtol: flo
     njev = np.zeros(rows)
     status, reason, message, done, accepted = Status.OK, "", None, 0, 0
     t1 = time.perf_counter()
-    with warnings.catch_warnings(record=True) as caught:
+    with warnings.catch_warnings(record=True) as caught, one_blas_thread():
         warnings.simplefilter("always")
         ode = METHODS[solver](fun, float(t[0]), y0, float(t[-1]),
                               **solver_options(solver, rtol, atol, max_step, first_step, jac))
@@ -141,7 +157,7 @@ def scipy_propagate(problem_bound, t: np.ndarray, solver: str, kernel, rtol: flo
             "rtol": rtol, "atol": atol, "max_step": max_step if max_step > 0 else None,
             "first_step": first_step if first_step > 0 else None,
             "steps": "accepted steps (solver.step() calls)", "nfev": "scipy's solver.nfev",
-            "njev": "scipy's solver.njev", "nlu": int(ode.nlu),
+            "njev": "scipy's solver.njev", "nlu": int(ode.nlu), "blas_threads": 1,
             **({"message": message} if message else {})}
     return EngineRun(y=y[:done], y_full=None, steps=steps[:done], nfev=nfev[:done],
                      status=status.value, reason=reason, setup_seconds=setup, seconds=seconds,
