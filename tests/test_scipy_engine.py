@@ -114,7 +114,7 @@ def test_records_are_external_and_listed():
     for name in SOLVERS:
         rec = METHODS[f"scipy-{name}"]
         assert rec.run is not None and rec.grid_param == "dt_out"
-        assert getattr(rec, "kind", "external") == "external"
+        assert rec.kind == "external"
         assert {"rtol", "atol", "max_step", "first_step", "dt_out"} <= {p.name for p in rec.params}
 
 

@@ -170,7 +170,7 @@ def _solve(a) -> int:
     try:
         out = solve_output(a.problem, a.method, steps=a.steps, t_end=a.t_end, every=a.every,
                            dt_out=a.dt_out, section=a.section, reference=a.reference,
-                           metrics=a.metrics or "", progress=progress)
+                           metrics=() if a.metrics is None else a.metrics, progress=progress)
     finally:
         progress.close()
     write_frame(out.frame, out.meta, a.format, a.output, sys.stdout)

@@ -50,7 +50,8 @@ from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 
-from gnibench.suite.cell.spec import parse_item, split_method
+from gnibench.suite.cell.cellspec import CellSpec
+from gnibench.suite.cell.spec import structure, with_options
 from gnibench.suite.foundation.budgets import INT_LIMIT, check_count
 from gnibench.suite.foundation.errors import UserError, unknown
 from gnibench.suite.foundation.params import format_float
@@ -64,33 +65,76 @@ _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]*$")
 
 @dataclass(frozen=True)
 class Cell:
-    """One problem x method x horizon: the unit of work of the runner.
+    """One problem x method x horizon of an experiment: the unit of work of the runner.
 
-    ``problem_spec``/``method_spec`` are the texts given to :func:`gnibench.suite.cell.solve.solve`;
-    ``problem``/``method`` are their canonical texts (what the tables show); ``metrics`` the
-    canonical texts of the chosen metrics (beside the default ones); ``reference`` the canonical
-    text of the chosen reference solution (:func:`gnibench.suite.cell.reference.parse_reference`:
-    ``exact``, ``heyoka:precision=...,tol=...``, ``rebound:tol=...`` or ``none``), None for the
-    default (the exact solution where the problem has one).
+    ``spec`` is the typed cell (:class:`~gnibench.suite.cell.cellspec.CellSpec`: the parsed
+    problem and method, horizon, sampling, reference solution and chosen metrics), made once when
+    the experiment is read; ``id``, ``group`` and ``label`` place it in the experiment. The other
+    attributes are the canonical texts and numbers the tables show: ``problem``/``method`` the
+    canonical specs, ``metrics`` the canonical texts of the chosen metrics (beside the default
+    ones), ``reference`` the canonical text of the chosen reference solution (``exact``,
+    ``heyoka:precision=...,tol=...``, ``rebound:tol=...`` or ``none``), None for the default (the
+    exact solution where the problem has one).
     """
 
     id: int
     group: int
     label: str
-    problem_spec: str
-    method_spec: str
-    problem: str
-    method: str
-    h: float
-    steps: int | None
-    t_end: float | None
-    every: int
-    nsteps: int
-    t_final: float
-    metrics: tuple[str, ...] = ()
-    dt_out: float | None = None     # time grid (suite/cell/timegrid.py); the specs stay as given
-    reference: str | None = None
-    section: int | None = None      # crossings of the problem's Poincaré section (suite/cell/sections.py)
+    spec: CellSpec
+
+    @property
+    def problem(self) -> str:
+        return self.spec.problem_text
+
+    @property
+    def method(self) -> str:
+        return self.spec.method_text
+
+    @property
+    def method_kind(self) -> str:
+        return self.spec.kind
+
+    @property
+    def h(self) -> float:
+        return self.spec.h
+
+    @property
+    def steps(self) -> int | None:
+        return self.spec.steps
+
+    @property
+    def t_end(self) -> float | None:
+        return self.spec.t_end
+
+    @property
+    def every(self) -> int:
+        return self.spec.every
+
+    @property
+    def nsteps(self) -> int:
+        return self.spec.nsteps
+
+    @property
+    def t_final(self) -> float:
+        return self.spec.t_final
+
+    @property
+    def metrics(self) -> tuple[str, ...]:
+        return self.spec.metric_texts
+
+    @property
+    def dt_out(self) -> float | None:
+        """The time grid (suite/cell/timegrid.py); the specs stay as given, but for an engine's."""
+        return self.spec.dt_out
+
+    @property
+    def reference(self) -> str | None:
+        return self.spec.reference_text
+
+    @property
+    def section(self) -> int | None:
+        """Crossings of the problem's Poincaré section (suite/cell/sections.py)."""
+        return self.spec.section
 
     def described(self) -> dict:
         """What the tables' metadata records of the cell (and a redraw compares)."""
@@ -328,21 +372,10 @@ def _reference_text(table: dict, where: str) -> str | None:
     return value
 
 
-def _reference(text: str | None, problem) -> str | None:
-    """The canonical text of a cell's reference solution (None: the problem's default)."""
-    from gnibench.suite.cell.reference import parse_reference
-
-    if text is None:
-        return None
-    spec = parse_reference(text, problem.record)
-    return "none" if spec is None else spec.text()
-
-
-def _check_metrics(metrics: tuple[str, ...], problems: list, where: str) -> None:
+def _check_metrics(choices, problems: list, where: str) -> None:
     """Each chosen metric must be able to apply to at least one problem of the group."""
-    from gnibench.suite.metrics.compute import not_applicable, parse_metrics
+    from gnibench.suite.metrics.compute import not_applicable
 
-    choices = parse_metrics(list(metrics))
     reasons = [not_applicable(choices, p) for p in problems]
     for c in choices:
         if all(c.text() in r for r in reasons):
@@ -371,25 +404,9 @@ def _vary(group: dict, where: str) -> tuple[list[tuple[str, str, list[str]]], ..
     return problem_vary, method_vary
 
 
-def with_options(spec: str, target: str, options: dict[str, str]) -> str:
-    """The spec with the options of ``target`` ('problem', 'method' = the base, or a modifier id)
-    set to the given texts; unchanged when ``target`` is a modifier the spec does not have."""
-    parts = [spec] if target == "problem" else split_method(spec)
-    out = []
-    for i, part in enumerate(parts):
-        name, given = parse_item(part, "problem" if target == "problem" else "method")
-        if (i == 0 and target in ("problem", "method")) or (i > 0 and name == target):
-            given = {**given, **options}
-        out.append(name + (":" + ",".join(f"{k}={v}" for k, v in given.items()) if given else ""))
-    return "+".join(out)
-
-
 def _expand(group: dict, gi: int, defaults: dict, where: str, first_id: int) -> list[Cell]:
-    from gnibench.suite.cell.driver import check_budgets
-    from gnibench.suite.cell.grid import grid, grid_step
-    from gnibench.suite.cell.spec import prepare
-    from gnibench.suite.cell.timegrid import effective_dt_out, engine_method
-    from gnibench.suite.metrics.compute import parse_metrics, period_grid
+    from gnibench.suite.metrics.cells import make_cell
+    from gnibench.suite.metrics.compute import parse_metrics
 
     _keys(group, GROUP_KEYS, where)
     label = _text(group, "label", where, one_line=True)
@@ -413,8 +430,11 @@ def _expand(group: dict, gi: int, defaults: dict, where: str, first_id: int) -> 
 
         points = [{k: format_float(v) for k, v in p.items()}
                   for p in point_options(group["points"], where)]
+    try:
+        modifiers = {mod.id for m in methods for mod in structure(m).modifiers}
+    except UserError as e:
+        raise UserError(f"{where}: {e}") from None
     for target, opt, _ in method_vary:
-        modifiers = {part.partition(":")[0].strip() for m in methods for part in split_method(m)[1:]}
         if target != "method" and target not in modifiers:
             raise UserError(f"{where}: vary.{target}.{opt}: no method of the group has the "
                             f"modifier {target!r}")
@@ -429,29 +449,14 @@ def _expand(group: dict, gi: int, defaults: dict, where: str, first_id: int) -> 
                 pspec = _apply(pspec, problem_vary, pvals)
                 mspec = _apply(mgiven, method_vary, mvals)
                 here = f"{where}: {pspec} {mspec}"
-                problem, method = prepare(pspec, mspec)
-                parsed_problems.append(problem)
-                external = getattr(method.base.record, "run", None) is not None
-                cell_dt_out = dt_out if section is not None else period_grid(
-                    metric_choices, problem, method, every, dt_out)   # eta: samples at t = nT
-                if cell_dt_out is not None and external:  # an engine's dt_out is its own grid
-                    method = engine_method(method, cell_dt_out, problem)
-                elif cell_dt_out is not None:
-                    effective_dt_out(method, cell_dt_out)  # refuses a conflicting method option
-                h = grid_step(method)
-                nsteps, h_last = grid(h, steps, t_end)
-                check_budgets(problem, method, steps, t_end, every, section, cell_dt_out)
-                if section is not None and not problem.record.sections:
-                    raise UserError(f"problem {problem.record.id!r} has no Poincaré section; "
-                                    "allowed: a group without section")
-                ref = None if section is not None else _reference(reference, problem)
+                spec = make_cell(pspec, mspec, steps=steps, t_end=t_end, every=every,
+                                 dt_out=dt_out, section=section, reference=reference,
+                                 metrics=metric_choices)
             except UserError as e:
                 raise UserError(f"{here}: {e}") from None
-            cells.append(Cell(first_id + len(cells), gi, label, pspec, mspec, problem.text(),
-                              method.text(), h, steps, t_end, every, nsteps,
-                              (nsteps - 1) * h + h_last, metrics, dt_out=cell_dt_out, reference=ref,
-                              section=section))
-    _check_metrics(metrics, parsed_problems, where)
+            parsed_problems.append(spec.problem)
+            cells.append(Cell(first_id + len(cells), gi, label, spec))
+    _check_metrics(metric_choices, parsed_problems, where)
     return cells
 
 

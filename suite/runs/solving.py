@@ -17,8 +17,9 @@ from gnibench.suite.foundation.errors import UserError
 @dataclass
 class SolveOutput:
     """A solved cell: its trajectory (:class:`gnibench.suite.cell.trajectory.Trajectory`),
-    metric outputs, chosen metrics that did not apply (id -> why), table, metadata, and the
-    Ctrl-C that stopped it (None if it ran to its end)."""
+    metric outputs, chosen metrics that did not apply (id -> why), table, metadata, the
+    Ctrl-C that stopped it (None if it ran to its end) and the typed cell
+    (:class:`gnibench.suite.cell.cellspec.CellSpec`)."""
 
     traj: object
     metrics: object
@@ -26,6 +27,7 @@ class SolveOutput:
     frame: object
     meta: dict
     interrupted: BaseException | None = None
+    cell: object = None
 
 
 def check_options(every: int, section, reference, dt_out) -> None:
@@ -44,31 +46,28 @@ def check_options(every: int, section, reference, dt_out) -> None:
 def solve_output(problem, method, *, steps: int | None = None, t_end: float | None = None,
                  every: int = 1, dt_out: float | None = None, section: int | None = None,
                  reference=None, metrics=(), progress=None) -> SolveOutput:
-    """Solve one cell and build its table and metadata. ``metrics``: metric specs (a list, or
-    one comma-separated string). Bad input raises UserError before any work; Ctrl-C is kept in
-    ``interrupted`` with the samples computed so far."""
+    """Solve one cell and build its table and metadata. ``problem``, ``method``: spec strings or
+    typed values; ``metrics``: metric specs (a list, or one comma-separated string) or parsed
+    choices (:func:`gnibench.suite.metrics.cells.make_cell`). Bad input raises UserError before
+    any work; Ctrl-C is kept in ``interrupted`` with the samples computed so far."""
     from gnibench.suite.cell.driver import Interrupted
-    from gnibench.suite.cell.solve import solve
-    from gnibench.suite.metrics.compute import apply, parse_metrics
+    from gnibench.suite.cell.solve import solve_cell
+    from gnibench.suite.metrics.cells import make_cell
+    from gnibench.suite.metrics.compute import apply
     from gnibench.suite.runs.storage import provenance
     from gnibench.suite.runs.tables import sample_frame
 
     check_options(every, section, reference, dt_out)
-    choices = parse_metrics(metrics if isinstance(metrics, str) else list(metrics))
-    if section is None and choices:           # eta: samples at whole periods t = nT
-        from gnibench.suite.cell.spec import prepare
-        from gnibench.suite.metrics.compute import period_grid
-
-        dt_out = period_grid(choices, *prepare(problem, method), every, dt_out)
+    cell = make_cell(problem, method, steps=steps, t_end=t_end, every=every, dt_out=dt_out,
+                     section=section, reference=reference, metrics=metrics)
     interrupted = None
     try:
-        traj = solve(problem, method, steps=steps, t_end=t_end, every=every,
-                     reference=reference, section=section, dt_out=dt_out, progress=progress)
+        traj = solve_cell(cell, progress=progress)
     except Interrupted as e:                  # keep what was computed
         traj, interrupted = e.partial, e
-    out, skipped = apply(traj, choices)
+    out, skipped = apply(traj, cell.metrics, problem=cell.problem)
     return SolveOutput(traj, out, skipped, sample_frame(traj, out), provenance(traj, out),
-                       interrupted)
+                       interrupted, cell)
 
 
 def json_meta(meta: dict) -> dict:
