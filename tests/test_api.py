@@ -173,3 +173,13 @@ def test_readme_example_runs(capsys):
         exec(compile(block, "README.md", "exec"), {})                    # noqa: S102
     out = capsys.readouterr().out
     assert "ok" in out and "scipy-rk45" in out
+
+
+def test_solve_takes_typed_values():
+    from gnibench.suite.cell.spec import parse_method, parse_problem
+
+    text = gnibench.solve("pendulum:p0=1.4", "rk4:h=0.1+projection", steps=20, every=4)
+    typed = gnibench.solve(parse_problem("pendulum:p0=1.4"), parse_method("rk4:h=0.1+projection"),
+                           steps=20, every=4)
+    pd.testing.assert_frame_equal(text.samples, typed.samples)
+    assert typed.meta["method"] == text.meta["method"] and typed.status == "ok"

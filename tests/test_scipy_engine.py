@@ -126,3 +126,47 @@ def test_options_reach_the_solver():
     a = solve("kepler-2d", "scipy-rk45:rtol=1e-6,atol=1e-6,first_step=1e-4", t_end=PERIOD)
     b = solve("kepler-2d", "scipy-rk45:rtol=1e-6,atol=1e-6", t_end=PERIOD)
     assert not np.array_equal(a.y[-1], b.y[-1])
+
+
+def test_every_work_precision_experiment_has_the_six_solvers():
+    from gnibench.suite.runs.experiment import load_experiment, shipped
+
+    wp = [name for name in shipped() if name.startswith("wp-")]
+    assert len(wp) >= 5
+    for name in wp:
+        bases = {c.method.split(":")[0] for c in load_experiment(name).cells}
+        assert {f"scipy-{s}" for s in SOLVERS} <= bases, name
+
+
+def test_work_precision_report_shows_the_solvers(tmp_path):
+    """A tiny work-precision run: scipy's DOP853 beside ours, ranked by nfev in the league table,
+    drawn as an adaptive external engine (triangles) on the nfev and wall-time panels."""
+    import re
+
+    import pandas as pd
+    from gnibench.reports.families import add_families
+    from gnibench.reports.palette import styles
+    from gnibench.reports.site import build_site
+    from gnibench.suite.runs.runner import run_experiment
+
+    path = tmp_path / "wp.toml"
+    path.write_text('name = "wp-tiny-scipy"\ntitle = "tiny wp"\nreference = "r"\n'
+                    't_end = 6.283185307179586\nevery = 1000\n'
+                    '[[cells]]\nproblems = ["kepler-2d"]\nmethods = ["dop853:atol=1e-14"]\n'
+                    'vary.rtol = [1e-6, 1e-9]\n'
+                    '[[cells]]\nproblems = ["kepler-2d"]\n'
+                    'methods = ["scipy-dop853:dt_out=3.14,atol=1e-14"]\nevery = 1\n'
+                    'vary.rtol = [1e-6, 1e-9]\n')
+    out = run_experiment(path, tmp_path / "out", jobs=1, log=open("/dev/null", "w"))  # noqa: SIM115
+    cells = add_families(pd.read_parquet(out / "cells.parquet"))
+    ours = cells[cells["family"] == "scipy-dop853"]
+    assert len(ours) == 2 and ours["adaptive"].all() and (ours["method_kind"] == "external").all()
+    assert (ours["sweep"] == "rtol").all() and ours["nfev"].notna().all()
+    style = styles(list(cells["family"].unique()), dict(zip(cells["family"], cells["adaptive"])),
+                   dict(zip(cells["family"], cells["method_kind"])))
+    assert style["scipy-dop853"]["marker"] == "^" and style["dop853"]["marker"] == "o"
+    build_site([out], tmp_path / "site", thresholds=(1e-6,))
+    html = (tmp_path / "site" / "wp-tiny-scipy.html").read_text()
+    rows = re.findall(r"<tr>\s*<td>([^<]*)</td><td><code>([^<]*)</code></td>", html)
+    ranks = {fam: rank for rank, fam in rows}
+    assert ranks["scipy-dop853"] in ("1", "2") and ranks["dop853"] in ("1", "2")
