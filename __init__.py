@@ -19,7 +19,9 @@ listings: calling the subpackage, ``gnibench.methods()``, returns the DataFrame 
 import sys
 import types
 
-from gnibench.suite.foundation.version import VERSION as __version__
+from gnibench.suite.foundation.version import VERSION
+
+__version__ = VERSION
 
 __all__ = ["RunResult", "Trajectory", "UserError", "methods", "metrics", "problems", "report",
            "reproduce", "run", "solve", "verify"]
@@ -54,7 +56,7 @@ def __getattr__(name: str):
 
         return importlib.import_module(f"{__name__}.{name}")
     if name in __all__:
-        import gnibench.api as api
+        import gnibench.api as api  # noqa: PLR0402 - `from gnibench import api` would recurse here
 
         return getattr(api, name)
     raise AttributeError(f"module 'gnibench' has no attribute {name!r}")

@@ -35,14 +35,14 @@ def _without_times(meta):
 
 CASES = {
     "fixed step, exact reference": (["kepler-2d", "rk4:h=0.05", "--steps", "200", "--every", "7"],
-                                    dict(steps=200, every=7)),
+                                    {"steps": 200, "every": 7}),
     "adaptive, metrics, period grid": (["kepler-2d", "dopri5:rtol=1e-9,atol=1e-9", "--t-end", "20",
                                         "--metrics", "eta,growth:of=H"],
-                                       dict(t_end=20.0, metrics=["eta", "growth:of=H"])),
+                                       {"t_end": 20.0, "metrics": ["eta", "growth:of=H"]}),
     "section": (["henon-heiles", "dop853:rtol=1e-10,atol=1e-10", "--t-end", "200", "--section",
-                 "4"], dict(t_end=200.0, section=4)),
+                 "4"], {"t_end": 200.0, "section": 4}),
     "scipy, dt_out": (["kepler-2d", "scipy-rk45:rtol=1e-8,atol=1e-8", "--t-end", str(PERIOD),
-                       "--dt-out", "0.5"], dict(t_end=PERIOD, dt_out=0.5)),
+                       "--dt-out", "0.5"], {"t_end": PERIOD, "dt_out": 0.5}),
 }
 
 
@@ -167,7 +167,7 @@ def test_verify_is_the_cli(tmp_path, capsys):
 def test_readme_example_runs(capsys):
     """The README's Python blocks, run as they are (so they stay true)."""
     text = (ROOT / "README.md").read_text(encoding="utf-8")
-    blocks = re.findall(r"```python\n(.*?)```", text, flags=re.S)
+    blocks = re.findall(r"```python\n(.*?)```", text, flags=re.DOTALL)
     assert blocks
     for block in blocks:
         exec(compile(block, "README.md", "exec"), {})                    # noqa: S102
@@ -183,3 +183,18 @@ def test_solve_takes_typed_values():
                            steps=20, every=4)
     pd.testing.assert_frame_equal(text.samples, typed.samples)
     assert typed.meta["method"] == text.meta["method"] and typed.status == "ok"
+
+
+def test_version_is_pyproject_s():
+    doc = tomllib.loads((ROOT / "pyproject.toml").read_text())
+    assert gnibench.__version__ == doc["project"]["version"]
+
+
+def test_reproduce_draws_the_figure(tmp_path):
+    dirs = gnibench.reproduce(["hlw-fig-1.4"], scale="quick", output=tmp_path, jobs=1)
+    assert dirs == {"hlw-fig-1.4": tmp_path / "hlw-fig-1.4"}
+    manifest = json.loads((dirs["hlw-fig-1.4"] / "figure" / "figure.json").read_text())
+    assert manifest["id"] == "hlw-fig-1.4" and manifest["panels"]
+    assert any(p.suffix == ".png" for p in (dirs["hlw-fig-1.4"] / "figure").iterdir())
+    with pytest.raises(gnibench.UserError, match="nosuch"):
+        gnibench.reproduce(["nosuch"], output=tmp_path)
