@@ -170,3 +170,12 @@ def test_work_precision_report_shows_the_solvers(tmp_path):
     rows = re.findall(r"<tr>\s*<td>([^<]*)</td><td><code>([^<]*)</code></td>", html)
     ranks = {fam: rank for rank, fam in rows}
     assert ranks["scipy-dop853"] in ("1", "2") and ranks["dop853"] in ("1", "2")
+
+
+def test_scipy_refusals_and_warnings_are_kept():
+    """A first step beyond the horizon is a UserError (solve_ivp raises a ValueError); scipy's
+    warnings (an rtol it raises to 100 eps) go to the engine's meta, not lost."""
+    with pytest.raises(UserError, match="first_step=100"):
+        solve("kepler-2d", "scipy-rk45:first_step=100", t_end=1.0)
+    traj = solve("kepler-2d", "scipy-rk45:rtol=1e-16", t_end=1.0)
+    assert any("rtol" in w for w in traj.provenance["engine"]["warnings"])

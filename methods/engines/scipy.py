@@ -32,6 +32,7 @@ import warnings
 
 import numpy as np
 from gnibench.methods.engines.base import EngineRun
+from gnibench.suite.foundation.errors import UserError
 from gnibench.suite.foundation.status import Status
 
 #: gnibench method id suffix -> scipy solver name
@@ -99,6 +100,9 @@ def scipy_propagate(problem_bound, t: np.ndarray, solver: str, kernel, rtol: flo
     rec = problem_bound.record
     n = rec.dim
     t = np.asarray(t, dtype=np.float64)
+    if first_step > t[-1] - t[0]:               # solve_ivp's ValueError, as a UserError
+        raise UserError(f"bad first_step={first_step:g}: larger than the horizon "
+                        f"{t[-1] - t[0]:g}; allowed: 0 (the solver's choice) or a smaller step")
     y0 = np.array(rec.y0(problem_bound.values), dtype=np.float64)
     t0 = time.perf_counter()
     fun, jac = field_functions(kernel, n)
@@ -158,7 +162,8 @@ def scipy_propagate(problem_bound, t: np.ndarray, solver: str, kernel, rtol: flo
             "first_step": first_step if first_step > 0 else None,
             "steps": "accepted steps (solver.step() calls)", "nfev": "scipy's solver.nfev",
             "njev": "scipy's solver.njev", "nlu": int(ode.nlu), "blas_threads": 1,
-            **({"message": message} if message else {})}
+            **({"message": message} if message else {}),
+            **({"warnings": said} if (said := sorted({str(w.message) for w in caught})) else {})}
     return EngineRun(y=y[:done], y_full=None, steps=steps[:done], nfev=nfev[:done],
                      status=status.value, reason=reason, setup_seconds=setup, seconds=seconds,
                      info=info, njev=njev[:done])
