@@ -158,19 +158,19 @@ def _parser() -> argparse.ArgumentParser:
 
 def _solve(a) -> int:
     from gnibench.suite.runs.progress import SolveProgress
-    from gnibench.suite.runs.solving import check_options, solve_output
+    from gnibench.suite.runs.solving import solve_cell_spec, solve_output
     from gnibench.suite.runs.storage import write_frame
 
     if a.format == "parquet" and a.output is None:
         raise UserError("--format parquet needs -o FILE (binary output is not written to stdout)")
     if a.output is not None:
         check_output_file(a.output)
-    check_options(a.every, a.section, a.reference, a.dt_out)
+    cell = solve_cell_spec(a.problem, a.method, steps=a.steps, t_end=a.t_end, every=a.every,
+                           dt_out=a.dt_out, section=a.section, reference=a.reference,
+                           metrics=() if a.metrics is None else a.metrics)
     progress = SolveProgress(f"{a.problem} {a.method}")
     try:
-        out = solve_output(a.problem, a.method, steps=a.steps, t_end=a.t_end, every=a.every,
-                           dt_out=a.dt_out, section=a.section, reference=a.reference,
-                           metrics=() if a.metrics is None else a.metrics, progress=progress)
+        out = solve_output(cell, progress=progress)
     finally:
         progress.close()
     write_frame(out.frame, out.meta, a.format, a.output, sys.stdout)

@@ -1,6 +1,8 @@
 """One cell solved and tabled: what ``gnibench solve`` writes and ``gnibench.solve`` returns.
 
-:func:`solve_output` checks the options, solves the cell, applies its metrics and builds the table
+:func:`solve_cell_spec` checks the options and makes the typed cell (before any work: the command
+line starts its progress display after it), :func:`solve_output` solves the cell, applies its
+metrics and builds the table
 (:func:`gnibench.suite.runs.tables.sample_frame`) and its metadata
 (:func:`gnibench.suite.runs.storage.provenance`). The command line writes both
 (:func:`gnibench.suite.runs.storage.write_frame`); the Python API returns them as a DataFrame and
@@ -43,23 +45,29 @@ def check_options(every: int, section, reference, dt_out) -> None:
                             "written)")
 
 
-def solve_output(problem, method, *, steps: int | None = None, t_end: float | None = None,
-                 every: int = 1, dt_out: float | None = None, section: int | None = None,
-                 reference=None, metrics=(), progress=None) -> SolveOutput:
-    """Solve one cell and build its table and metadata. ``problem``, ``method``: spec strings or
-    typed values; ``metrics``: metric specs (a list, or one comma-separated string) or parsed
-    choices (:func:`gnibench.suite.metrics.cells.make_cell`). Bad input raises UserError before
-    any work; Ctrl-C is kept in ``interrupted`` with the samples computed so far."""
+def solve_cell_spec(problem, method, *, steps: int | None = None, t_end: float | None = None,
+                    every: int = 1, dt_out: float | None = None, section: int | None = None,
+                    reference=None, metrics=()):
+    """The typed cell of a solve (:func:`gnibench.suite.metrics.cells.make_cell`), after the
+    checks of options that exclude each other. ``problem``, ``method``: spec strings or typed
+    values; ``metrics``: metric specs (a list, or one comma-separated string) or parsed choices.
+    Bad input raises UserError before any work."""
+    from gnibench.suite.metrics.cells import make_cell
+
+    check_options(every, section, reference, dt_out)
+    return make_cell(problem, method, steps=steps, t_end=t_end, every=every, dt_out=dt_out,
+                     section=section, reference=reference, metrics=metrics)
+
+
+def solve_output(cell, progress=None) -> SolveOutput:
+    """Solve a typed cell (:func:`solve_cell_spec`) and build its table and metadata; Ctrl-C is
+    kept in ``interrupted`` with the samples computed so far."""
     from gnibench.suite.cell.driver import Interrupted
     from gnibench.suite.cell.solve import solve_cell
-    from gnibench.suite.metrics.cells import make_cell
     from gnibench.suite.metrics.compute import apply
     from gnibench.suite.runs.storage import provenance
     from gnibench.suite.runs.tables import sample_frame
 
-    check_options(every, section, reference, dt_out)
-    cell = make_cell(problem, method, steps=steps, t_end=t_end, every=every, dt_out=dt_out,
-                     section=section, reference=reference, metrics=metrics)
     interrupted = None
     try:
         traj = solve_cell(cell, progress=progress)
