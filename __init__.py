@@ -23,8 +23,8 @@ from gnibench.suite.foundation.version import VERSION
 
 __version__ = VERSION
 
-__all__ = ["RunResult", "Trajectory", "UserError", "methods", "metrics", "problems", "report",
-           "reproduce", "run", "solve", "verify"]
+__all__ = ["RunResult", "Trajectory", "UserError", "load", "methods", "metrics", "problems",
+           "report", "reproduce", "run", "solve", "verify"]
 _LISTINGS = ("methods", "problems")      # subpackages that are also listings of the API
 
 

@@ -5,8 +5,10 @@ from __future__ import annotations
 
 def _frame(what: str):
     import pandas as pd
+    from gnibench.suite.cell.user.loader import discover
     from gnibench.suite.cli.listing import _params, listing
 
+    discover()                      # GNIBENCH_LOAD and entry points, as `gnibench list`
     rows = []
     for r in listing(what):
         row = {k: v for k, v in r.items() if k != "properties"}

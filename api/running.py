@@ -49,18 +49,21 @@ def read_tables(out: Path, output: Path | None) -> RunResult:
 def run(experiment, *, output=None, jobs: int | None = None, executor: str = "local",
         fresh: bool = False, scheduler: str | None = None, scale: str = "paper") -> RunResult:
     """Run an experiment, as ``gnibench run``: a shipped id (``"quick"``), a path to a TOML file,
-    or a dict with the TOML schema (``suite/experiments/README.md``). ``output``: the results
+    or a dict with the TOML schema (``suite/experiments/README.md``; its ``load`` paths are
+    relative to the working directory). ``output``: the results
     directory (resumable, as the command line's ``-o``; no report is written, see
     :func:`report`); None runs in a temporary directory and keeps the tables in memory only.
     ``jobs``, ``executor`` (``local`` or ``dask``), ``scheduler``, ``fresh``, ``scale``: as on
     the command line."""
     from gnibench.reports.markdown import render_summary
+    from gnibench.suite.cell.user.loader import discover
     from gnibench.suite.runs import executors
     from gnibench.suite.runs.experiment import load_experiment, parse_experiment
     from gnibench.suite.runs.runner import run_experiments
 
-    if isinstance(experiment, dict):
-        exp = parse_experiment(toml_text(experiment), "experiment dict", scale)
+    discover()                      # GNIBENCH_LOAD and entry points, as `gnibench run`
+    if isinstance(experiment, dict):        # its `load` paths are relative to the working dir
+        exp = parse_experiment(toml_text(experiment), "experiment dict", scale, Path.cwd())
     elif isinstance(experiment, (str, Path)):
         exp = load_experiment(experiment, scale)
     else:

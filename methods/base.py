@@ -53,7 +53,8 @@ class Method(Registered):
     ``field_modifiers_refused``, when set, says why the method cannot integrate a field changed by a
     modifier (observer, penalty); the spec parser then refuses such a modifier at validation.
     ``kind`` says how it runs (:data:`KINDS`); ``origin``, where a user definition comes from
-    (None for the shipped methods; :mod:`gnibench.suite.foundation.registries`).
+    (None for the shipped methods; :mod:`gnibench.suite.foundation.registries`), and
+    ``definition`` its text.
     """
 
     registry = "method"
@@ -75,6 +76,7 @@ class Method(Registered):
     aliases: tuple[str, ...] = field(default=())
     kind: str = "compiled"
     origin: Any = None
+    definition: str = ""             # a user definition's text (part of a stored cell's key)
 
     def __post_init__(self):
         if self.kind not in KINDS:

@@ -88,7 +88,8 @@ def cells_table(part, samples, wall: dict[int, float], compile_s: dict[int, floa
         s = samples[samples["cell"] == cid] if samples is not None else None
         if s is not None and "crossing" in s:
             s = s[s["crossing"].isna()]
-        row = [str(cid), str(r["method"]), str(r["status"]), _horizon(r), num(r["every"]),
+        kind = " (runs in Python)" if r.get("method_kind") == "python" else ""
+        row = [str(cid), str(r["method"]) + kind, str(r["status"]), _horizon(r), num(r["every"]),
                num(r["t_final"], ".6g"), num(r["steps"]), num(r["nfev"]),
                num(wall.get(cid, math.nan) * 1e3), num(compile_s.get(cid), ".2f")]
         row += [num(r[f"max_abs_err_{i}"]) for i in errs]

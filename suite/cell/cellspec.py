@@ -127,7 +127,7 @@ def build(problem, method, *, steps: int | None = None, t_end: float | None = No
         if dt_out is not None:
             raise UserError("--dt-out (or the method option dt_out) does not apply with "
                             "--section (the section points are written)")
-    if dt_out is not None and method.kind == "external":   # an engine's dt_out is its own grid
+    if dt_out is not None and method.kind != "compiled":   # an engine's dt_out: its own grid
         method = engine_method(method, dt_out, problem)
     elif dt_out is not None:
         effective_dt_out(method, dt_out)                     # refuses a conflicting method option

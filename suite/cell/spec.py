@@ -182,6 +182,8 @@ def parse_problem(text: str) -> Bound:
 
     name, given = parse_item(text, "problem")
     if name not in REGISTRY:
+        _discover()                      # GNIBENCH_LOAD and entry points, once per process
+    if name not in REGISTRY:
         raise unknown("problem", name, REGISTRY)
     rec = REGISTRY[name]
     values = bind(rec.params, given, f"problem {name}")
@@ -224,6 +226,14 @@ def check_initial_point(rec, values: dict) -> None:
                             f"allowed: a start where the field and the integrals are finite")
 
 
+def _discover() -> None:
+    """User definitions of ``GNIBENCH_LOAD`` and the installed entry points
+    (:mod:`gnibench.suite.cell.user`), looked for the first time an id is unknown."""
+    from gnibench.suite.cell.user.loader import discover
+
+    discover()
+
+
 def _integral_names(rec) -> list[str]:
     from gnibench.problems.codegen import problem_meta
 
@@ -237,6 +247,8 @@ def parse_method(text: str, problem: Bound | None = None) -> MethodConfig:
     parts = split_method(text)
     name, given = parse_item(parts[0], "method")
     name = ALIASES.get(name, name)
+    if name not in METHODS and name not in MODIFIERS:
+        _discover()                      # GNIBENCH_LOAD and entry points, once per process
     if name not in METHODS:
         if name in MODIFIERS:
             raise UserError(f"{name!r} is a modifier, not a base method; write e.g. rk4:h=0.01+{name}")

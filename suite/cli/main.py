@@ -59,6 +59,21 @@ def check_output_file(path: Path) -> None:
         raise UserError(f"bad -o {path}: not writable")
 
 
+def _load_option(parser) -> None:
+    parser.add_argument("--load", action="append", default=[], metavar="FILE",
+                        help="a TOML file of user definitions ([[problem]], [[method]]); "
+                             "repeatable (also GNIBENCH_LOAD=FILE:FILE)")
+
+
+def _definitions(a) -> None:
+    """User definitions: GNIBENCH_LOAD and the entry points, then each --load FILE."""
+    from gnibench.suite.cell.user.loader import discover, load
+
+    discover()
+    for path in a.load:
+        load(path)
+
+
 def _parser() -> argparse.ArgumentParser:
     p = _Parser(prog="gnibench", description="Benchmark integrators of ODEs with first integrals.")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
@@ -87,10 +102,12 @@ def _parser() -> argparse.ArgumentParser:
     s.add_argument("--section", type=int, metavar="K",
                    help="integrate until K crossings of the problem's Poincaré section (within "
                         "--t-end / --steps) and write the section points (suite/cell/sections.py)")
+    _load_option(s)
 
     ls = sub.add_parser("list", help="list problems, methods or metrics")
     ls.add_argument("what", choices=("problems", "methods", "metrics"))
     ls.add_argument("--format", choices=("table", "json"), default="table")
+    _load_option(ls)
 
     r = sub.add_parser("run", help="run an experiment (TOML file or shipped name)")
     r.add_argument("experiment", help="path to a TOML file, or the name of a shipped experiment")
@@ -108,6 +125,7 @@ def _parser() -> argparse.ArgumentParser:
                    help="ignore the cells stored by earlier runs in the output directory")
     r.add_argument("--scale", default="paper", metavar="paper|quick",
                    help="the experiment's paper scale (default) or its shortened quick scale")
+    _load_option(r)
 
     from gnibench.suite.cli.reproduce import add_parser
 
@@ -259,6 +277,8 @@ def main(argv=None) -> int:
 
         commands = {"solve": _solve, "list": _list, "run": _run, "reproduce": _reproduce,
                     "bench": _bench, "report": _report}
+        if a.command in ("solve", "list", "run"):
+            _definitions(a)
         if a.command == "verify":
             from gnibench.suite.cli.verify import verify_command
 

@@ -9,7 +9,8 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from gnibench.suite.ledger import closed_forms, expressions, identities
+from gnibench.suite.foundation import expressions
+from gnibench.suite.ledger import closed_forms, identities
 from gnibench.suite.ledger.entries import Claim
 
 
