@@ -198,3 +198,36 @@ def test_reproduce_draws_the_figure(tmp_path):
     assert any(p.suffix == ".png" for p in (dirs["hlw-fig-1.4"] / "figure").iterdir())
     with pytest.raises(gnibench.UserError, match="nosuch"):
         gnibench.reproduce(["nosuch"], output=tmp_path)
+
+
+def test_load_user_definitions():
+    """gnibench.load defines a file's problems and methods; the API lists and solves them as the
+    command line does with --load."""
+    from gnibench.suite.cell.user.loader import unload
+
+    defs = ROOT / "examples" / "definitions.toml"
+    try:
+        _load_and_solve(defs)
+    finally:
+        unload(defs)                       # leave the registries as other tests expect them
+
+
+def _load_and_solve(defs):
+    ids = gnibench.load(defs)
+    assert {"oscillator", "heun3", "py-rk4"} <= set(ids)
+    listed = gnibench.methods().set_index("id")
+    assert listed.loc["py-rk4", "kind"] == "python" and listed.loc["heun3", "kind"] == "compiled"
+    assert "oscillator" in gnibench.problems()["id"].tolist()
+    api = gnibench.solve("oscillator:omega=2", "py-rk4:h=0.05", steps=40, every=10)
+    cli = _cli_json_load(defs, ["oscillator:omega=2", "py-rk4:h=0.05", "--steps", "40",
+                                "--every", "10"])
+    assert list(api.samples.columns) == list(cli["columns"])
+    assert api.samples["nfev"].tolist() == cli["columns"]["nfev"]
+    assert api.samples["err_H"].tolist() == cli["columns"]["err_H"]
+
+
+def _cli_json_load(defs, argv) -> dict:
+    proc = subprocess.run([sys.executable, "-m", "gnibench.suite.cli.main", "solve", *argv,
+                           "--load", str(defs), "--format", "json"], capture_output=True,
+                          text=True, check=True)
+    return json.loads(proc.stdout)
