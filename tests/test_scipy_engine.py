@@ -179,3 +179,31 @@ def test_scipy_refusals_and_warnings_are_kept():
         solve("kepler-2d", "scipy-rk45:first_step=100", t_end=1.0)
     traj = solve("kepler-2d", "scipy-rk45:rtol=1e-16", t_end=1.0)
     assert any("rtol" in w for w in traj.provenance["engine"]["warnings"])
+
+
+def test_ctrl_c_keeps_the_samples_so_far(monkeypatch):
+    """A KeyboardInterrupt inside the solver (here raised by the field's 300th call) ends the
+    cell as the compiled drivers end one: the driver's Interrupted, with the samples computed."""
+    import gnibench.methods.engines.scipy as engine
+    from gnibench.suite.cell.driver import Interrupted
+
+    real = engine.field_functions
+
+    def counting(kernel, n):
+        fun, jac = real(kernel, n)
+        calls = [0]
+
+        def interrupting(t, y):
+            calls[0] += 1
+            if calls[0] == 300:
+                raise KeyboardInterrupt
+            return fun(t, y)
+
+        return interrupting, jac
+
+    monkeypatch.setattr(engine, "field_functions", counting)
+    with pytest.raises(Interrupted) as e:
+        solve("kepler-2d", "scipy-rk45:rtol=1e-8,atol=1e-8,dt_out=0.1", t_end=10 * PERIOD)
+    part = e.value.partial
+    assert part.status is Status.INTERRUPTED and 10 < len(part.t) and part.t[-1] < 10 * PERIOD
+    assert np.all(np.isfinite(part.y)) and part.nfev[-1] < 300

@@ -23,7 +23,8 @@ failures), -5 (repeated convergence failures) and a step that no longer advances
 solve_ivp would loop) -> ``step_too_small``; LSODA's -1 (excess work) and
 our own step budget ``max_steps`` (solve_ivp has none; an integration that needs more steps would
 run for hours in Python) -> ``max_steps``; a non-finite state, sample or field value ->
-``nonfinite``. The reason quotes scipy's message.
+``nonfinite``; Ctrl-C between two steps -> ``interrupted`` with the samples so far (the driver
+then raises its ``Interrupted``). The reason quotes scipy's message.
 """
 from __future__ import annotations
 
@@ -95,7 +96,7 @@ def scipy_propagate(problem_bound, t: np.ndarray, solver: str, kernel, rtol: flo
     """Integrate a problem with scipy's ``solver`` from t = 0 onto the sample times ``t`` (t[0] = 0,
     increasing), as ``solve_ivp`` with ``t_eval = t`` does."""
     import scipy
-    from scipy.integrate._ivp.ivp import METHODS
+    import scipy.integrate
 
     rec = problem_bound.record
     n = rec.dim
@@ -120,36 +121,39 @@ def scipy_propagate(problem_bound, t: np.ndarray, solver: str, kernel, rtol: flo
     t1 = time.perf_counter()
     with warnings.catch_warnings(record=True) as caught, one_blas_thread():
         warnings.simplefilter("always")
-        ode = METHODS[solver](fun, float(t[0]), y0, float(t[-1]),
-                              **solver_options(solver, rtol, atol, max_step, first_step, jac))
+        ode = getattr(scipy.integrate, solver)(fun, float(t[0]), y0, float(t[-1]), **solver_options(
+            solver, rtol, atol, max_step, first_step, jac))
         start = (0, ode.nfev, ode.njev)   # the counters of a sample at t0: before any step
-        while done < rows:
-            message = ode.step()
-            if ode.status == "failed":
-                break
-            accepted += 1
-            new = int(np.searchsorted(t, ode.t, side="right"))
-            if new > done:
-                y[done:new] = ode.dense_output()(t[done:new]).T
-                steps[done:new], nfev[done:new], njev[done:new] = accepted, ode.nfev, ode.njev
-                if done == 0:             # t[0] = t0, read (as solve_ivp does) from the first
-                    steps[0], nfev[0], njev[0] = start    # step's dense output
-                done = new
-            if ode.status == "finished":
-                break
-            if accepted >= max_steps:
-                status = Status.MAX_STEPS
-                reason = (f"more than max_steps={max_steps} steps before t = {float(t[-1]):g} "
-                          f"(reached t = {float(ode.t):.17g})")
-                break
-            if ode.t == ode.t_old:    # a step that no longer moves t (LSODA does not stop)
-                status = Status.STEP_TOO_SMALL
-                reason = f"scipy {solver}: the step no longer advances t = {float(ode.t):.17g}"
-                break
+        try:
+            while done < rows:
+                message = ode.step()
+                if ode.status == "failed":
+                    break
+                accepted += 1
+                new = int(np.searchsorted(t, ode.t, side="right"))
+                if new > done:
+                    y[done:new] = ode.dense_output()(t[done:new]).T
+                    steps[done:new], nfev[done:new], njev[done:new] = accepted, ode.nfev, ode.njev
+                    if done == 0:             # t[0] = t0, read (as solve_ivp does) from the first
+                        steps[0], nfev[0], njev[0] = start    # step's dense output
+                    done = new
+                if ode.status == "finished":
+                    break
+                if accepted >= max_steps:
+                    status = Status.MAX_STEPS
+                    reason = (f"more than max_steps={max_steps} steps before t = {float(t[-1]):g} "
+                              f"(reached t = {float(ode.t):.17g})")
+                    break
+                if ode.t == ode.t_old:    # a step that no longer moves t (LSODA does not stop)
+                    status = Status.STEP_TOO_SMALL
+                    reason = f"scipy {solver}: the step no longer advances t = {float(ode.t):.17g}"
+                    break
+        except KeyboardInterrupt:         # Ctrl-C: a status; the samples so far are kept
+            status, reason = Status.INTERRUPTED, f"interrupted at t = {float(ode.t):.17g}"
     seconds = time.perf_counter() - t1
 
     finite = np.all(np.isfinite(y[:done]), axis=1)
-    if ode.status == "failed":
+    if ode.status == "failed" and status is not Status.INTERRUPTED:
         status, reason = _failure(ode, solver, message, caught)
     if not finite.all():
         done = int(np.argmin(finite))
