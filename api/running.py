@@ -154,9 +154,12 @@ def report(dirs, output, *, accuracy=None, benchmarks=None) -> Path:
     from gnibench.reports.site import build_site
 
     dirs = [Path(dirs)] if isinstance(dirs, (str, Path)) else [Path(d) for d in dirs]
-    if accuracy is not None and not all(0 < float(a) < math.inf for a in accuracy):
-        raise UserError(f"bad accuracy {accuracy!r}; allowed: numbers > 0")
-    thresholds = DEFAULT_THRESHOLDS if accuracy is None else tuple(float(a) for a in accuracy)
+    try:
+        thresholds = DEFAULT_THRESHOLDS if accuracy is None else tuple(float(a) for a in accuracy)
+    except (TypeError, ValueError):
+        thresholds = ()
+    if not thresholds or not all(0 < a < math.inf for a in thresholds):
+        raise UserError(f"bad accuracy {accuracy!r}; allowed: numbers > 0, e.g. (1e-4, 1e-8)")
     with contextlib.redirect_stdout(io.StringIO()):
         return Path(build_site(dirs, Path(output), thresholds,
                                None if benchmarks is None else Path(benchmarks)))

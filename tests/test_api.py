@@ -149,6 +149,8 @@ def test_run_and_report(tmp_path):
     assert res.meta["experiment"] == "api-run" and set(res.timings.columns) >= {"cell"}
     index = gnibench.report(res.output, tmp_path / "site")
     assert index.is_file() and "api-run" in index.read_text(encoding="utf-8")
+    with pytest.raises(gnibench.UserError, match="bad accuracy"):
+        gnibench.report(res.output, tmp_path / "site2", accuracy=["x"])
     with pytest.raises(gnibench.UserError, match="nosuch"):
         gnibench.run("nosuch")
     with pytest.raises(gnibench.UserError, match="allowed"):
