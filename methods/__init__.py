@@ -12,6 +12,7 @@ from gnibench.methods import (
                      modifiers,
                      partitioned,
                      projection,
+                     scipy_methods,
 )
 from gnibench.suite.foundation.registries import register
 
@@ -38,6 +39,12 @@ METHODS = {m.id: m for m in (
     external.heyoka_taylor,
     external.rebound_ias15,
     external.rebound_whfast,
+    scipy_methods.scipy_rk45,
+    scipy_methods.scipy_rk23,
+    scipy_methods.scipy_dop853,
+    scipy_methods.scipy_radau,
+    scipy_methods.scipy_bdf,
+    scipy_methods.scipy_lsoda,
 )}
 
 ALIASES = {alias: m.id for m in METHODS.values() for alias in m.aliases}

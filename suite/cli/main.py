@@ -175,45 +175,29 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def _solve(a) -> int:
-    from gnibench.suite.cell.driver import Interrupted
-    from gnibench.suite.cell.solve import solve_cell
-    from gnibench.suite.metrics.cells import make_cell
-    from gnibench.suite.metrics.compute import apply
     from gnibench.suite.runs.progress import SolveProgress
-    from gnibench.suite.runs.storage import write_result
+    from gnibench.suite.runs.solving import solve_cell_spec, solve_output
+    from gnibench.suite.runs.storage import write_frame
 
     if a.format == "parquet" and a.output is None:
         raise UserError("--format parquet needs -o FILE (binary output is not written to stdout)")
     if a.output is not None:
         check_output_file(a.output)
-    if a.section is not None:
-        if a.every != 1:
-            raise UserError("--every does not apply with --section (the section points are written)")
-        if a.reference is not None:
-            raise UserError("--reference does not apply with --section (no global error is "
-                            "written)")
-        if a.dt_out is not None:
-            raise UserError("--dt-out does not apply with --section (the section points are "
-                            "written)")
-    cell = make_cell(a.problem, a.method, steps=a.steps, t_end=a.t_end, every=a.every,
-                     dt_out=a.dt_out, section=a.section, reference=a.reference,
-                     metrics=() if a.metrics is None else a.metrics)
+    cell = solve_cell_spec(a.problem, a.method, steps=a.steps, t_end=a.t_end, every=a.every,
+                           dt_out=a.dt_out, section=a.section, reference=a.reference,
+                           metrics=() if a.metrics is None else a.metrics)
     progress = SolveProgress(f"{a.problem} {a.method}")
-    interrupted = None
     try:
-        traj = solve_cell(cell, progress=progress)
-    except Interrupted as e:              # keep what was computed, then exit 130
-        traj, interrupted = e.partial, e
+        out = solve_output(cell, progress=progress)
     finally:
         progress.close()
-    metrics, skipped = apply(traj, cell.metrics, problem=cell.problem)
-    write_result(traj, metrics, a.format, a.output, sys.stdout)
-    if interrupted is not None:
-        raise interrupted
-    for name, why in skipped.items():
+    write_frame(out.frame, out.meta, a.format, a.output, sys.stdout)
+    if out.interrupted is not None:       # the samples so far are written, then exit 130
+        raise out.interrupted
+    for name, why in out.skipped.items():
         print(f"gnibench: metric {name} does not apply: {why}", file=sys.stderr)
-    if traj.reason:
-        print(f"gnibench: {traj.status}: {traj.reason}", file=sys.stderr)
+    if out.traj.reason:
+        print(f"gnibench: {out.traj.status}: {out.traj.reason}", file=sys.stderr)
     return 0
 
 

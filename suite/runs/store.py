@@ -39,9 +39,8 @@ PART_FORMAT = 1
 
 
 def package_root() -> Path:
-    import gnibench
-
-    return Path(gnibench.__file__).resolve().parent
+    """The folder of the package ``gnibench`` (this file is ``suite/runs/store.py`` in it)."""
+    return Path(__file__).resolve().parents[2]
 
 
 _fingerprint: str | None = None
