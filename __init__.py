@@ -1,6 +1,6 @@
 """gnibench: benchmark and verification suite for integrators of ODEs with first integrals.
 
-The Python API (README, "Python API"; :mod:`gnibench.api`)::
+The Python API (README, "Python API"; :mod:`gnibench.suite.api`)::
 
     import gnibench
     traj = gnibench.solve("kepler-2d", "dopri5:rtol=1e-10,atol=1e-10", t_end=62.83)
@@ -12,7 +12,7 @@ pandas until a function is called).
 
 ``gnibench.problems`` and ``gnibench.methods`` are both the registries' subpackages and the API's
 listings: calling the subpackage, ``gnibench.methods()``, returns the DataFrame of
-:func:`gnibench.api.listing.methods` (a module may be given a callable class,
+:func:`gnibench.suite.api.listing.methods` (a module may be given a callable class,
 ``module.__class__ = ...``, Python >= 3.5); ``from gnibench.methods import METHODS`` and
 ``import gnibench.methods.external`` work as for any package.
 """
@@ -32,7 +32,7 @@ class _Listing(types.ModuleType):
     """A registry subpackage that, called, lists its registry as a DataFrame."""
 
     def __call__(self):
-        from gnibench.api import listing
+        from gnibench.suite.api import listing
 
         return getattr(listing, self.__name__.rpartition(".")[2])()
 
@@ -56,7 +56,7 @@ def __getattr__(name: str):
 
         return importlib.import_module(f"{__name__}.{name}")
     if name in __all__:
-        import gnibench.api as api  # noqa: PLR0402 - `from gnibench import api` would recurse here
+        from gnibench.suite import api
 
         return getattr(api, name)
     raise AttributeError(f"module 'gnibench' has no attribute {name!r}")

@@ -1,4 +1,4 @@
-"""The Python API (api/, README "Python API") against the command line: same columns, same
+"""The Python API (suite/api/, README "Python API") against the command line: same columns, same
 numbers, same error lines; the README's example runs; ``import gnibench`` stays cheap."""
 from __future__ import annotations
 
@@ -126,7 +126,7 @@ def test_import_is_cheap():
 def test_experiment_dicts_are_the_shipped_files():
     """Every shipped experiment, given as the dict its TOML reads to, expands to the same cells and
     figure (strings with quotes, line breaks and non-ASCII text, nested tables, arrays of tables)."""
-    from gnibench.api.running import toml_text
+    from gnibench.suite.api.running import toml_text
     from gnibench.suite.runs.experiment import load_experiment, parse_experiment, shipped
 
     for name, text in shipped().items():

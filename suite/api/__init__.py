@@ -7,9 +7,9 @@ and the installed entry points are loaded by the first call of a function here, 
 command line. Errors raise
 :class:`~gnibench.suite.foundation.errors.UserError` with the line the command line prints.
 """
-from gnibench.api.listing import methods, metrics, problems
-from gnibench.api.running import RunResult, report, reproduce, run, verify
-from gnibench.api.solving import Trajectory, solve
+from gnibench.suite.api.listing import methods, metrics, problems
+from gnibench.suite.api.running import RunResult, report, reproduce, run, verify
+from gnibench.suite.api.solving import Trajectory, solve
 from gnibench.suite.cell.user.loader import load
 from gnibench.suite.foundation.errors import UserError
 
