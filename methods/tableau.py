@@ -1,50 +1,72 @@
-"""Butcher tableaus as validated, exact data ([HLW] II.1; diffrax-style checks in __post_init__)."""
+"""Butcher tableaus as validated, exact data ([HLW] II.1; diffrax-style checks in __post_init__).
+
+Every tableau is checked on construction against all order conditions up to its order
+(methods/order_conditions.py: rooted trees, exact arithmetic). A verdict is kept by the hash of the
+tableau's exact data, in the process and in the disk cache (``order-conditions/``, checksummed like
+every entry), so importing the registry does not redo the high-order checks (Verner 9(8) in Q(√6):
+~1 s the first time).
+"""
 from __future__ import annotations
 
+import hashlib
+import json
 from dataclasses import dataclass
-from fractions import Fraction as Fr
+
+from gnibench.methods import order_conditions as oc
+from gnibench.suite.foundation import cache
+
+CHECKER_VERSION = "1"          # bump when the checker changes: the cached verdicts are then unused
+_VERDICTS: dict[str, list[str]] = {}
+
+
+def verdict(kind: str, order: int, tol, *data) -> list[str]:
+    """The failing conditions (as text) of ``oc.check`` (kind 'tableau': data = A, b, c) or
+    ``oc.check_dense`` (kind 'dense': data = A, b(θ)), cached by the hash of the exact data."""
+    text = json.dumps([CHECKER_VERSION, kind, order, str(tol), data], default=str)
+    key = hashlib.sha256(text.encode()).hexdigest()
+    if key in _VERDICTS:
+        return _VERDICTS[key]
+    path = cache.cache_dir("order-conditions") / f"{key}.json"
+    raw = cache.read_checked(path, "an order-condition verdict")
+    if raw is not None:
+        found = json.loads(raw)
+    else:
+        if kind == "tableau":
+            failures = oc.check(*data, order=order, tol=tol)
+        else:
+            failures = oc.check_dense(*data, order=order, tol=tol)
+        found = [str(f) for f in failures]
+        cache.write_checked(path, json.dumps(found))
+    _VERDICTS[key] = found
+    return found
+
+
+def require(found: list[str], what: str) -> None:
+    if found:
+        more = f" (and {len(found) - 3} more)" if len(found) > 3 else ""
+        raise ValueError(f"{what}: " + "; ".join(found[:3]) + more)
 
 
 @dataclass(frozen=True)
 class Tableau:
-    """A Runge-Kutta tableau with exact rational entries where they exist.
+    """A Runge-Kutta tableau with exact entries (Fraction, or Surd p + q√d) where they exist.
 
-    Checks on construction: rows of A sum to c, sum(b) = 1, and the order conditions up to
-    min(order, 4) (higher orders are checked by the registry-wide order test).
+    Checks on construction: the rows of A sum to c and every order condition up to ``order``
+    holds, exactly, or within ``tol`` for data known only as decimals or doubles (DOP853's).
     """
 
-    a: tuple[tuple[Fr, ...], ...]
-    b: tuple[Fr, ...]
-    c: tuple[Fr, ...]
+    a: tuple[tuple, ...]
+    b: tuple
+    c: tuple
     order: int
+    tol: float = 0
 
     def __post_init__(self):
         s = len(self.b)
         if len(self.a) != s or any(len(row) != s for row in self.a) or len(self.c) != s:
             raise ValueError("tableau shapes do not match")
-        for i in range(s):
-            if abs(sum(self.a[i]) - self.c[i]) > 1e-14:   # float data (DOP853) sums to ~1e-15
-                raise ValueError(f"row {i} of A does not sum to c_{i}")
-        b, c, a = self.b, self.c, self.a
-        p_max = min(self.order, 4)
-        conditions = [(1, sum(b), 1)]
-        if p_max >= 2:
-            conditions.append((2, sum(b[i] * c[i] for i in range(s)), Fr(1, 2)))
-        if p_max >= 3:
-            conditions.append((3, sum(b[i] * c[i] ** 2 for i in range(s)), Fr(1, 3)))
-            conditions.append((3, sum(b[i] * a[i][j] * c[j] for i in range(s) for j in range(s)),
-                               Fr(1, 6)))
-        if p_max >= 4:
-            conditions.append((4, sum(b[i] * c[i] ** 3 for i in range(s)), Fr(1, 4)))
-            conditions.append((4, sum(b[i] * c[i] * a[i][j] * c[j] for i in range(s)
-                                      for j in range(s)), Fr(1, 8)))
-            conditions.append((4, sum(b[i] * a[i][j] * c[j] ** 2 for i in range(s)
-                                      for j in range(s)), Fr(1, 12)))
-            conditions.append((4, sum(b[i] * a[i][j] * a[j][k] * c[k] for i in range(s)
-                                      for j in range(s) for k in range(s)), Fr(1, 24)))
-        for p, got, want in conditions:
-            if abs(got - want) > 1e-14:
-                raise ValueError(f"order-{p} condition fails: {got} != {want}")
+        require(verdict("tableau", self.order, self.tol, self.a, self.b, self.c),
+                f"tableau of order {self.order}")
 
     @property
     def stages(self) -> int:
@@ -55,14 +77,14 @@ class Tableau:
         return all(self.a[i][j] == 0 for i in range(self.stages) for j in range(i, self.stages))
 
 
-def tableau(a, b, c, order) -> Tableau:
-    """Build a Tableau from nested lists of ints, Fractions or strings like '1/6'."""
-    def conv(x):
-        return Fr(x) if isinstance(x, (int, str, Fr)) else Fr(float(x))
-    return Tableau(tuple(tuple(conv(x) for x in row) for row in a), tuple(conv(x) for x in b),
-                   tuple(conv(x) for x in c), order)
+def tableau(a, b, c, order, tol=0) -> Tableau:
+    """Build a Tableau from nested lists of ints, Fractions or strings like '1/6', '-.25e-1' or
+    '1/2-1/6*sqrt(3)' (oc.number); floats are taken as the exact value of the double."""
+    return Tableau(tuple(tuple(oc.number(x) for x in row) for row in a),
+                   tuple(oc.number(x) for x in b), tuple(oc.number(x) for x in c), order, tol)
 
 
 def lit(x) -> str:
     """A coefficient as a float literal that numba folds as a constant (nearest double)."""
     return repr(float(x))
+
