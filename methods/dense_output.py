@@ -148,7 +148,8 @@ class DenseOutput:
             raise ValueError("Hairer's form of dense output needs a tableau whose last stage is f(y1)")
         if len(self.extra_c) != self.extra_stages:
             raise ValueError("extra stages: one c per row")
-        if any(len(row) != total for row in (self.b_theta or self.d)):
+        if (len(self.b_theta) != total if self.polynomial
+                else any(len(row) != total for row in self.d)):
             raise ValueError("each row of the extension covers every stage, extra ones included")
         for i, (row, c) in enumerate(zip(self.extra_a, self.extra_c)):
             if len(row) != s + i or abs(sum(row) - c) > max(self.tol, 1e-14):
@@ -223,9 +224,31 @@ def generate_dense(dense: DenseOutput, tab, count: int, n: int) -> tuple[str, se
     return "\n".join(lines) + "\n", arities
 
 
+def _quotients(dense: DenseOutput, tab) -> list[list]:
+    """q_j(θ) with b_j(θ) = θ b_j + θ (θ - 1) q_j(θ) (b_j = 0 beyond the pair's stages), by exact
+    synthetic division; the remainder b_j(1) - b_j is 0 (within ``tol`` for decimal data)."""
+    out = []
+    for j, row in enumerate(dense.b_theta):
+        d = [oc.number(x) for x in row]                 # (b_j(θ) - θ b_j) / θ: coefficients of θ^0..
+        d[0] = d[0] - (tab.b[j] if j < tab.stages else 0)
+        m = len(d) - 1
+        q = [0] * m
+        q[m - 1] = d[m]
+        for k in range(m - 1, 0, -1):
+            q[k - 1] = d[k] + q[k]
+        remainder = d[0] + q[0]
+        if abs(float(remainder)) > dense.tol * 1e6:            # 0 for exact data
+            raise ValueError(f"interpolant weight of stage {j + 1}: b_j(1) differs from b_j by "
+                             f"{float(remainder):.3g}")
+        out.append(q)
+    return out
+
+
 def _generate_polynomial(dense: DenseOutput, tab, count: int, n: int) -> tuple[str, set[int]]:
-    """The same three functions for polynomial weights: cf = (y0, C_1, ..., C_q) with
-    C_p = h Σ_j r_jp K_j; u(θ) = y0 + θ (C_1 + θ (C_2 + ...)) and du/dθ by Horner's rule."""
+    """The same three functions for polynomial weights, in the form
+    u(θ) = y0 + θ (y1 - y0) + θ (θ - 1) Σ_k θ^k G_k,  G_k = h Σ_j q_jk K_j  (:func:`_quotients`),
+    so that u(1) = y1 to round-off whatever the size of Verner's weights (Vern6's reach 1.2e5 and
+    cancel to b_j: summed at θ = 1 in doubles they miss y1 by 8e-13 per step)."""
     s, comma = tab.stages, "," if n == 1 else ""
     a_all = dense.stages_a(tab)
     arities: set[int] = set()
@@ -245,22 +268,28 @@ def _generate_polynomial(dense: DenseOutput, tab, count: int, n: int) -> tuple[s
     def tup(items):
         return "(" + ", ".join(items) + comma + ")"
 
-    m = dense.degree
-    for p in range(1, m + 1):
-        terms = [(row[p - 1], j) for j, row in enumerate(dense.b_theta) if row[p - 1] != 0]
-        lines.append(f"    c{p} = " + tup("h * (" + " + ".join(f"{lit(c)} * k{j}[{i}]" for c, j in terms)
+    q = _quotients(dense, tab)
+    m = len(q[0])                                       # G_0 .. G_{m-1}
+    lines.append("    dy = " + tup(f"y1[{i}] - y[{i}]" for i in range(n)))
+    for k in range(m):
+        terms = [(row[k], j) for j, row in enumerate(q) if row[k] != 0]
+        lines.append(f"    g{k} = " + tup("h * (" + " + ".join(f"{lit(c)} * k{j}[{i}]" for c, j in terms)
                                            + ")" for i in range(n)))
-    cf = ", ".join(f"c{r}" for r in range(m + 1))
-    lines.append(f"    return (y, {', '.join(f'c{p}' for p in range(1, m + 1))})")
+    names = ["y", "dy"] + [f"g{k}" for k in range(m)]
+    lines.append(f"    return ({', '.join(names)})")
+    cf = ", ".join(names)
 
-    def horner(i, p=1):
-        return f"c{p}[{i}]" if p == m else f"c{p}[{i}] + theta * ({horner(i, p + 1)})"
+    def horner(i, k=0):                                 # S(θ) = Σ θ^k G_k
+        return f"g{k}[{i}]" if k == m - 1 else f"g{k}[{i}] + theta * ({horner(i, k + 1)})"
 
-    def slope(i, p=1):
-        return f"{p}.0 * c{p}[{i}]" if p == m else f"{p}.0 * c{p}[{i}] + theta * ({slope(i, p + 1)})"
+    def dhorner(i, k=1):                                # S'(θ)
+        return f"{k}.0 * g{k}[{i}]" if k == m - 1 else f"{k}.0 * g{k}[{i}] + theta * ({dhorner(i, k + 1)})"
 
     lines += ["\n@njit(cache=True)\ndef dense_eval(cf, theta):", f"    {cf} = cf",
-              "    return " + tup(f"c0[{i}] + theta * ({horner(i)})" for i in range(n))]
+              "    return " + tup(f"y[{i}] + theta * (dy[{i}] + (theta - 1.0) * ({horner(i)}))"
+                                  for i in range(n))]
+    slope = (lambda i: f"dy[{i}] + (2.0 * theta - 1.0) * ({horner(i)}) + theta * (theta - 1.0) * "
+             f"({dhorner(i)})") if m > 1 else (lambda i: f"dy[{i}] + (2.0 * theta - 1.0) * g0[{i}]")
     lines += ["\n@njit(cache=True)\ndef dense_slope(cf, theta):", f"    {cf} = cf",
               "    return " + tup(slope(i) for i in range(n))]
     return "\n".join(lines) + "\n", arities

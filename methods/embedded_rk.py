@@ -153,7 +153,7 @@ def generate_adaptive(pair: Pair):
         n, s, tab = ctx.n, pair.tab.stages, pair.tab
         count = s - 1 if pair.fsal else s
         lines, arities = stage_lines(tab, count, first="k0")
-        lines.append(f"    y1 = {combination(tab.b, arities)}")
+        lines.append(f"    y1 = {combination(tab.doubles[1], arities)}")
         fsal = pair.fsal and not pair.lazy_last
         if fsal:
             lines.append(f"    k{s - 1} = f(y1, par)")

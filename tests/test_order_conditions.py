@@ -96,3 +96,18 @@ def test_every_shipped_tableau_has_its_order(mid, tab, pair):
         bhat = [x - oc.number(e) for x, e in zip(tab.b, pair.e)]
         assert oc.check(tab.a, bhat, None, pair.embedded_order, pair.tol) == []
         assert oc.check(tab.a, bhat, None, pair.embedded_order + 1, pair.tol) != []
+
+
+def test_the_record_of_shipped_verdicts_is_exactly_the_registry():
+    """methods/order_verdicts.json lists the verdict keys of exactly the registry's tableaus,
+    estimates and extensions (a fresh process: the keys asked for while importing the registry),
+    each of which the tests above and tests/test_dense_output.py recompute without it."""
+    import json
+    import subprocess
+    import sys
+
+    code = ("import json, gnibench.methods; from gnibench.methods import tableau; "
+            "print(json.dumps(sorted(tableau.SEEN)))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    from gnibench.methods.tableau import _SHIPPED_PATH
+    assert json.loads(out.stdout) == sorted(json.loads(_SHIPPED_PATH.read_text()))
