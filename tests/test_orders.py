@@ -119,7 +119,7 @@ def test_observed_order_of_high_order_pairs(mid):
     hs = T / (n0 * 2.0 ** np.arange(levels))
     errs = []
     for h in hs:
-        n = int(round(T / h))
+        n = int(T / h + 0.5)
         r = solve(spec, method_spec(mid, float(h)), steps=n, every=n)
         errs.append(global_errors(r)[-1] if r.status == "ok" and r.steps[-1] == n else np.inf)
     p, used = observed_order(hs, np.array(errs))
