@@ -34,7 +34,10 @@ def shipped_verdicts() -> set[str]:
     """Keys of the shipped tableaus' passing verdicts (methods/order_verdicts.json): the exact data
     of every tableau, estimate and extension of the registry, hashed with the checker's version.
     tests/test_order_conditions.py recomputes each of them from scratch and checks that the file
-    lists exactly the registry's keys, so a changed coefficient is never covered by it."""
+    lists exactly the registry's keys, so a changed coefficient is never covered by it. After a
+    change to a shipped tableau (its checks pass on import), write the file again with
+    ``python -c "import gnibench.methods.tableau as t, gnibench.methods, json;
+    json.dump(sorted(t.SEEN), open(t._SHIPPED_PATH, 'w'), indent=0)"``."""
     global _SHIPPED
     if _SHIPPED is None:
         _SHIPPED = set(json.loads(_SHIPPED_PATH.read_text()))
