@@ -60,9 +60,9 @@ def test_extension_has_exactly_its_order(method):
     q, tol = pair.dense.order, pair.dense.tol
     a, w = pair.dense.stages_a(pair.tab), pair.dense.weights(pair.tab, oc.number)
     assert oc.check_dense(a, w, q, tol) == []
-    assert oc.check_dense(a, w, q + 1, tol) != []
-    if method in ("dopri5", "dop853"):                  # far from order q + 1 (0.51, 0.75)
-        assert pair.dense.residuals(pair.tab, q + 1)[q] > 0.1
+    # one order up, in floats (exactly it costs a minute for Vern9): DOPRI5 0.51, DOP853 0.75,
+    # Vern7 1.3e-4 (its published order 7), far above the float residuals below q (<= 4.3e-12)
+    assert pair.dense.residuals(pair.tab, q + 1)[q] > (0.1 if method in ("dopri5", "dop853") else 1e-6)
 
 
 def test_dopri5_extension_is_scipys():
@@ -73,7 +73,10 @@ def test_dopri5_extension_is_scipys():
     assert np.array_equal(ours, RK45.P)
 
 
-@pytest.mark.parametrize("method", sorted(PAIRS))
+DENSE_KERNELS = ["dopri5", "dop853", "vern6", "vern9"]   # Hairer's form; Verner's FSAL and not
+
+
+@pytest.mark.parametrize("method", DENSE_KERNELS)
 def test_endpoints(kepler, method):
     """u(0) = y0 exactly, u(1) = y1 and u'(0) = h f(y0), u'(1) = h f(y1) to round-off (the
     slope's round-off grows with the size w of the weights: Verner's reach 7e5 for Vern8)."""
@@ -123,7 +126,7 @@ def test_interpolant_order(kepler, method, h0):
     assert abs(slope - (q + 1)) <= 0.35
 
 
-@pytest.mark.parametrize("method", sorted(PAIRS))
+@pytest.mark.parametrize("method", DENSE_KERNELS)
 def test_recomputed_step_is_the_drivers(method):
     """dense_coeffs(y_n, h_n) ends on the driver's y_n+1 bit for bit, at every accepted step."""
     prob, cfg = prepare("kepler-2d", f"{method}:rtol=1e-10,atol=1e-10")
@@ -151,8 +154,7 @@ def _dense_steps(t_steps: np.ndarray, t_grid: np.ndarray) -> int:
     return len(np.unique(np.searchsorted(t_steps, t_grid, side="left")))
 
 
-@pytest.mark.parametrize("method,tol", [("dopri5", 1e-10), ("dop853", 1e-12), ("vern7", 1e-12),
-                                        ("vern9", 1e-12)])
+@pytest.mark.parametrize("method,tol", [("dopri5", 1e-10), ("dop853", 1e-12), ("vern9", 1e-12)])
 @pytest.mark.parametrize("every", [1, 7])
 def test_dt_out_keeps_the_steps(method, tol, every):
     spec = f"{method}:rtol={tol},atol={tol}"

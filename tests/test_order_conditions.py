@@ -88,14 +88,24 @@ def _tableaus():
 @pytest.mark.parametrize("mid,tab,pair", _tableaus(), ids=[t[0] for t in _tableaus()])
 def test_every_shipped_tableau_has_its_order(mid, tab, pair):
     """The conditions up to the stated order hold (exactly, or within the tableau's tolerance for
-    decimal or double data), recomputed here without any cached verdict; and not one order up."""
+    decimal or double data), recomputed here without any cached verdict; and not one order up
+    (in floats: the smallest defect one order up, Vern8's b at order 9, is 4.2e-7; below the
+    order the float residuals stay under 3.3e-11, Vern6's cancelling weights)."""
     assert oc.check(tab.a, tab.b, tab.c, tab.order, tab.tol) == []
-    if tab.order < oc.MAX_ORDER:
-        assert oc.check(tab.a, tab.b, None, tab.order + 1, tab.tol) != []
+    assert _float_defect(tab.a, tab.b, tab.order + 1) > 1e-10
     if pair is not None and pair.embedded_order:
         bhat = [x - oc.number(e) for x, e in zip(tab.b, pair.e)]
         assert oc.check(tab.a, bhat, None, pair.embedded_order, pair.tol) == []
-        assert oc.check(tab.a, bhat, None, pair.embedded_order + 1, pair.tol) != []
+        assert _float_defect(tab.a, bhat, pair.embedded_order + 1) > 1e-10
+
+
+def _float_defect(a, b, k) -> float:
+    """max over the trees with k nodes of |Σ b_i Φ_i(t) - 1/γ(t)|, in floats: "not one order
+    up" (exactly, Feagin's order-11 check alone takes half a minute)."""
+    from gnibench.methods.dense_output import elementary_weights
+    af, bf, memo = [[float(x) for x in row] for row in a], [float(x) for x in b], {}
+    return max(abs(sum(x * y for x, y in zip(bf, elementary_weights(af, t, memo))) - 1 / oc.density(t))
+               for t in oc.trees(k)[k - 1])
 
 
 def test_the_record_of_shipped_verdicts_is_exactly_the_registry():
