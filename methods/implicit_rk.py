@@ -17,15 +17,16 @@ IMPLICIT_EULER = tableau([[1]], [1], [1], order=1)                      # [HLW] 
 IMPLICIT_MIDPOINT = tableau([["1/2"]], [1], ["1/2"], order=2)           # [HLW] (1.7)
 
 # Gauss-Legendre collocation (HLW II.1.3, Table 1.1-1.2); entries with sqrt(3), sqrt(15) are the
-# nearest doubles. 2 stages: Butcher's 4th-order implicit symplectic method ([B] §6, §8).
+# nearest doubles (so the order conditions hold to tol = 1e-15, not exactly). 2 stages: Butcher's
+# 4th-order implicit symplectic method ([B] §6, §8).
 _R3, _R15 = 3 ** 0.5, 15 ** 0.5
 GAUSS4 = tableau([[1 / 4, 1 / 4 - _R3 / 6], [1 / 4 + _R3 / 6, 1 / 4]], ["1/2", "1/2"],
-                 [1 / 2 - _R3 / 6, 1 / 2 + _R3 / 6], order=4)
+                 [1 / 2 - _R3 / 6, 1 / 2 + _R3 / 6], order=4, tol=1e-15)
 GAUSS6 = tableau([[5 / 36, 2 / 9 - _R15 / 15, 5 / 36 - _R15 / 30],
                   [5 / 36 + _R15 / 24, 2 / 9, 5 / 36 - _R15 / 24],
                   [5 / 36 + _R15 / 30, 2 / 9 + _R15 / 15, 5 / 36]],
                  ["5/18", "4/9", "5/18"], [1 / 2 - _R15 / 10, 1 / 2, 1 / 2 + _R15 / 10],
-                 order=6)
+                 order=6, tol=1e-15)
 
 
 def _d_coefficients(tab: Tableau) -> tuple[Fr, ...]:
