@@ -21,6 +21,7 @@ import contextlib
 import os
 import queue
 import signal
+import sys
 from collections.abc import Callable, Iterator
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
@@ -58,6 +59,10 @@ def check(executor: str, jobs: int | None, scheduler: str | None) -> None:
         except ImportError:
             raise UserError("--executor dask needs dask[distributed]: pip install "
                             "'gnibench[dask]'") from None
+    if scheduler is not None:      # before the output directory exists: is a scheduler there?
+        from gnibench.suite.runs.scheduler import probe
+
+        probe(scheduler)
 
 
 def run(groups: list[list], executor: str = "local", jobs: int | None = None,
@@ -83,12 +88,32 @@ def _serial(groups, progress) -> Iterator[CellOutcome]:
 _queue = None
 
 
-def _worker_init(q) -> None:
-    """In each worker: Ctrl-C is the parent's business; progress goes through the queue."""
+def _worker_init(q, parent: int) -> None:
+    """In each worker: Ctrl-C is the parent's business (SIGINT ignored, SIGTERM ends the worker),
+    the worker dies with its parent, and progress goes through the queue."""
     global _queue
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    die_with_parent(parent)
     _queue = q
     install_reporter(_report)
+
+
+PR_SET_PDEATHSIG = 1
+
+
+def die_with_parent(parent: int) -> None:
+    """Ask the kernel to kill this process when its parent dies (Linux: prctl PR_SET_PDEATHSIG),
+    so that a worker never outlives a run killed with kill -9; then end at once if the parent
+    already died before the request (the worker would have been adopted by another process)."""
+    if sys.platform.startswith("linux"):
+        import ctypes
+
+        with contextlib.suppress(OSError, AttributeError):
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+    if os.getppid() != parent:
+        os._exit(1)
 
 
 def _report(cell_id: int, fraction: float) -> None:
@@ -113,7 +138,7 @@ def _local(groups, jobs, progress) -> Iterator[CellOutcome]:
     ctx = mp.get_context(method)
     q = ctx.Queue()
     pool = ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_worker_init,
-                               initargs=(q,))
+                               initargs=(q, os.getpid()))
     waiting = {i: list(g[1:]) for i, g in enumerate(groups)}
     running = {pool.submit(run_cell, g[0]): i for i, g in enumerate(groups) if g}
     try:
@@ -154,8 +179,9 @@ def _dask(groups, jobs, scheduler) -> Iterator[CellOutcome]:
     else:
         try:
             client = Client(scheduler, timeout="10s")
-        except (OSError, TimeoutError) as e:
-            raise UserError(f"bad --scheduler {scheduler!r}: cannot connect ({e})") from None
+        except Exception as e:  # noqa: BLE001 - it answered the probe, then went away
+            raise UserError(f"bad --scheduler {scheduler!r}: cannot connect "
+                            f"({type(e).__name__}: {e})") from None
     try:
         waiting = {}                   # pure=False: fresh keys, never a result of another run
         for g in groups:
