@@ -14,7 +14,7 @@ from pathlib import Path
 from gnibench.suite.foundation.errors import UserError
 
 
-def add_parser(sub, path_type) -> None:
+def add_parser(sub, path_type, jobs_type) -> None:
     r = sub.add_parser("reproduce", help="run and draw figures and tables of the seeds")
     r.add_argument("ids", nargs="*", metavar="ID",
                    help="figure ids (gnibench reproduce --list), or all")
@@ -22,7 +22,7 @@ def add_parser(sub, path_type) -> None:
                    help="paper: the seed's horizons and step sizes (default); quick: shortened")
     r.add_argument("-o", "--output", type=path_type, default=None, metavar="DIR",
                    help="results directory (default: results/seeds, shared with gnibench verify)")
-    r.add_argument("-j", "--jobs", type=int, default=None, metavar="N",
+    r.add_argument("-j", "--jobs", type=jobs_type, default=None, metavar="N",
                    help="worker processes (default: the number of cores; 1: in this process)")
     r.add_argument("--executor", default="local", metavar="local|dask",
                    help="local: a process pool (default); dask: a Dask cluster")
