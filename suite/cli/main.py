@@ -298,6 +298,11 @@ def _main(argv) -> int:
 
         commands = {"solve": _solve, "list": _list, "run": _run, "reproduce": _reproduce,
                     "bench": _bench, "report": _report}
+        if a.command in ("solve", "run", "reproduce", "verify", "bench"):
+            from gnibench.suite.foundation.cache import check_cache_root
+
+            check_limits()
+            check_cache_root()
         if a.command == "verify":
             from gnibench.suite.cli.verify import verify_command
 

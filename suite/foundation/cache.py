@@ -38,6 +38,20 @@ def cache_root() -> Path:
     return root
 
 
+def check_cache_root() -> None:
+    """Refuse, before any work, a cache directory that cannot be one or cannot be written."""
+    from gnibench.suite.foundation.errors import UserError
+    from gnibench.suite.foundation.outputs import probe
+
+    root = cache_root()
+    try:
+        probe(root, "cache")
+    except UserError:
+        given = os.environ.get("GNIBENCH_CACHE_DIR")
+        name = f"GNIBENCH_CACHE_DIR={given}" if given else f"the cache directory {root}"
+        raise UserError(f"bad {name}: not writable; allowed: a writable directory") from None
+
+
 def cache_dir(sub: str = "") -> Path:
     root = cache_root()
     d = root / sub if sub else root

@@ -13,7 +13,8 @@ three steps, each failing with one line:
 3. a Dask connection (``distributed.comm.connect``) and an ``identity`` request, whose answer
    must be a scheduler's.
 
-All of it runs in a daemon thread joined with the deadline, so nothing in it can hang the command.
+All of it (name resolution included) runs in a daemon thread joined with the deadline, so nothing
+in it can hang the command.
 """
 from __future__ import annotations
 
@@ -105,15 +106,15 @@ def probe(address: str, timeout: float = TIMEOUT) -> dict:
     except (ValueError, TypeError) as e:
         raise _bad(address, str(e)) from None
     deadline = time.monotonic() + timeout
-    if scheme == "tcp":
-        _tcp_first_bytes(address, host, int(port), deadline)
 
-    def ask():
+    def ask():             # name resolution included: nothing here may outlast the deadline
+        if scheme == "tcp":
+            _tcp_first_bytes(address, host, int(port), deadline)
         left = max(deadline - time.monotonic(), 0.1)
         return asyncio.run(asyncio.wait_for(_identity(address, left), left))
 
     try:
-        info = _in_thread(ask, max(deadline - time.monotonic(), 0.1) + 0.5)
+        info = _in_thread(ask, timeout + 0.5)
     except TimeoutError:
         raise _bad(address, f"no Dask answer within {timeout:g} s") from None
     except UserError:
