@@ -97,10 +97,9 @@ def draw_all(dirs: list[Path], figures: list[dict] | None = None, log=None,
     figures = figures or [None] * len(dirs)
     jobs = min(jobs or os.cpu_count() or 1, len(dirs))
     if jobs > 1:
-        import multiprocessing
-        from concurrent.futures import ProcessPoolExecutor
+        from gnibench.suite.foundation.processes import pool as process_pool
 
-        with ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("spawn")) as pool:
+        with process_pool(jobs) as pool:       # Ctrl-C stops the workers at once
             results = list(pool.map(_draw, dirs, figures))
     else:
         results = [_draw(d, f) for d, f in zip(dirs, figures)]

@@ -38,6 +38,9 @@ class _Stream:
             return len(text)
         try:
             return self._stream.write(text)
+        except UnicodeEncodeError:         # an ASCII terminal: µ, §, θ as escapes, not a crash
+            encoding = getattr(self._stream, "encoding", None) or "ascii"
+            return self.write(text.encode(encoding, "backslashreplace").decode(encoding))
         except (OSError, ValueError) as e:
             self._failed(e)
             return len(text)

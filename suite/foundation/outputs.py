@@ -35,9 +35,10 @@ def _kind(mode: int) -> str:
     return "not a regular file"
 
 
-def probe(directory: Path, what: str) -> None:
-    """Create and remove a file in ``directory``: a one-line UserError when that fails."""
-    path = Path(directory) / f".gnibench-probe.tmp{os.getpid()}"
+def probe(directory: Path, what: str, name: str = "gnibench-probe") -> None:
+    """Create and remove a file in ``directory`` (named as the temporary file of an atomic write
+    of ``name``): a one-line UserError when that fails."""
+    path = Path(directory) / f".{name}.tmp{os.getpid()}"
     try:
         fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
         os.close(fd)
@@ -49,7 +50,13 @@ def probe(directory: Path, what: str) -> None:
 def check_output_file(path: Path, option: str = "-o") -> None:
     """Refuse, before any work, an output file that cannot be written as a regular file."""
     path = Path(path)
-    what = f"{option} {path}"
+    try:
+        _check_file(path, f"{option} {path}")
+    except OSError as e:                 # a name too long, a loop of symlinks, ...
+        raise UserError(f"bad {option} {path}: {e.strerror or e}") from None
+
+
+def _check_file(path: Path, what: str) -> None:
     if path.is_symlink():
         raise UserError(f"bad {what}: it is a symlink (it would be replaced, not written "
                         f"through); allowed: a regular file, e.g. {path.resolve()}")
@@ -69,14 +76,20 @@ def check_output_file(path: Path, option: str = "-o") -> None:
         raise UserError(f"bad {what}: {parent} is not a directory")
     if mode is not None and not os.access(path, os.W_OK):
         raise UserError(f"bad {what}: not writable")
-    probe(parent, what)
+    probe(parent, what, path.name)
 
 
 def check_output_dir(path: Path, option: str = "-o") -> None:
     """Refuse, before any work, an output directory that cannot be one: an existing file, or a
     place where it cannot be created or written (nothing is created here)."""
     path = Path(path)
-    what = f"{option} {path}"
+    try:
+        _check_dir(path, f"{option} {path}")
+    except OSError as e:
+        raise UserError(f"bad {option} {path}: {e.strerror or e}") from None
+
+
+def _check_dir(path: Path, what: str) -> None:
     if path.exists() and not path.is_dir():
         raise UserError(f"bad {what}: it exists and is not a directory")
     existing = path

@@ -21,11 +21,11 @@ import contextlib
 import os
 import queue
 import signal
-import sys
 from collections.abc import Callable, Iterator
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
 from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.processes import quiet_worker, stop_now
 from gnibench.suite.runs.cellwork import CellOutcome, install_reporter, run_cell
 
 EXECUTORS = ("local", "dask")
@@ -68,7 +68,8 @@ def check(executor: str, jobs: int | None, scheduler: str | None) -> None:
 def run(groups: list[list], executor: str = "local", jobs: int | None = None,
         scheduler: str | None = None, progress: Progress | None = None) -> Iterator[CellOutcome]:
     """Run the cells of ``groups`` and yield their outcomes as they finish."""
-    jobs = jobs or default_jobs()
+    total = sum(len(g) for g in groups)
+    jobs = max(1, min(jobs or default_jobs(), total))     # -j 1000 for 6 cells: 6 processes
     if executor == "dask":
         yield from _dask(groups, jobs, scheduler)
     elif jobs == 1 or sum(len(g) for g in groups) <= 1:
@@ -92,28 +93,9 @@ def _worker_init(q, parent: int) -> None:
     """In each worker: Ctrl-C is the parent's business (SIGINT ignored, SIGTERM ends the worker),
     the worker dies with its parent, and progress goes through the queue."""
     global _queue
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)
-    die_with_parent(parent)
+    quiet_worker(parent)
     _queue = q
     install_reporter(_report)
-
-
-PR_SET_PDEATHSIG = 1
-
-
-def die_with_parent(parent: int) -> None:
-    """Ask the kernel to kill this process when its parent dies (Linux: prctl PR_SET_PDEATHSIG),
-    so that a worker never outlives a run killed with kill -9; then end at once if the parent
-    already died before the request (the worker would have been adopted by another process)."""
-    if sys.platform.startswith("linux"):
-        import ctypes
-
-        with contextlib.suppress(OSError, AttributeError):
-            libc = ctypes.CDLL(None, use_errno=True)
-            libc.prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
-    if os.getppid() != parent:
-        os._exit(1)
 
 
 def _report(cell_id: int, fraction: float) -> None:
@@ -157,13 +139,7 @@ def _local(groups, jobs, progress) -> Iterator[CellOutcome]:
 
 def _stop(pool: ProcessPoolExecutor) -> None:
     """Shut the pool down now: cancel what has not started, stop what runs (Ctrl-C)."""
-    processes = list(getattr(pool, "_processes", {}).values())
-    pool.shutdown(wait=False, cancel_futures=True)
-    for p in processes:
-        if p.is_alive():
-            p.terminate()
-    for p in processes:
-        p.join(timeout=5)
+    stop_now(pool)
 
 
 # -- Dask -----------------------------------------------------------------------------------
@@ -173,9 +149,17 @@ def _dask(groups, jobs, scheduler) -> Iterator[CellOutcome]:
 
     cluster = None
     if scheduler is None:
-        cluster = LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True,
-                               dashboard_address=None)
-        client = Client(cluster)
+        # SIGINT blocked while the cluster starts: its threads and worker processes inherit the
+        # mask, so a Ctrl-C at the terminal reaches this process only (which closes the cluster)
+        # instead of printing a traceback from every worker; a Ctrl-C meanwhile waits, not lost
+        blocked = {signal.SIGINT}
+        signal.pthread_sigmask(signal.SIG_BLOCK, blocked)
+        try:
+            cluster = LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True,
+                                   dashboard_address=None)
+            client = Client(cluster)
+        finally:
+            signal.pthread_sigmask(signal.SIG_UNBLOCK, blocked)
     else:
         try:
             client = Client(scheduler, timeout="10s")
@@ -192,7 +176,13 @@ def _dask(groups, jobs, scheduler) -> Iterator[CellOutcome]:
             for cell in waiting.pop(fut, []):
                 pending.add(client.submit(run_cell, cell, pure=False))
             yield fut.result()
+    except BaseException:
+        import logging
+
+        # Ctrl-C: the workers are stopped mid-cell; Dask's warnings about that are no news
+        logging.getLogger("distributed").setLevel(logging.ERROR)
+        raise
     finally:
         client.close()
         if cluster is not None:
-            cluster.close()
+            cluster.close(timeout=5)

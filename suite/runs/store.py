@@ -126,9 +126,9 @@ class Store:
         from gnibench.suite.foundation.outputs import probe
 
         out = Path(out)
-        if out.exists() and not out.is_dir():
-            raise UserError(f"bad -o {out}: it exists and is not a directory")
         try:
+            if out.exists() and not out.is_dir():
+                raise UserError(f"bad -o {out}: it exists and is not a directory")
             out.mkdir(parents=True, exist_ok=True)
         except OSError as e:
             raise UserError(f"bad -o {out}: cannot create the directory ({e.strerror})") from None
