@@ -3,6 +3,8 @@ byte-identical tables, Ctrl-C, and the progress lines."""
 from __future__ import annotations
 
 import os
+import re
+import shutil
 import signal
 import subprocess
 import sys
@@ -60,16 +62,20 @@ def test_kill_9_then_resume_reuses_cells_and_gives_identical_tables(tmp_path):
     whole, killed = tmp_path / "whole", tmp_path / "killed"
     subprocess.run(GNIBENCH + ["run", str(exp), "-o", str(whole), "-j", "1"], check=True,
                    capture_output=True)
-    proc = subprocess.Popen(GNIBENCH + ["run", str(exp), "-o", str(killed), "-j", "1"],
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    deadline = time.monotonic() + 120
-    while len(list((killed / "parts").glob("*.parquet"))) < 2:
-        assert proc.poll() is None, "the run ended before it could be killed"
-        assert time.monotonic() < deadline
-        time.sleep(0.02)
-    proc.send_signal(signal.SIGKILL)
-    proc.wait()
-    stored = len(list((killed / "parts").glob("*.parquet")))
+    for _ in range(5):           # the run is frozen (SIGSTOP) the moment 2 cells are stored
+        shutil.rmtree(killed, ignore_errors=True)
+        proc = subprocess.Popen(GNIBENCH + ["run", str(exp), "-o", str(killed), "-j", "1"],
+                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        deadline = time.monotonic() + 600            # a safety net against a hang only
+        while len(list((killed / "parts").glob("*.parquet"))) < 2 and proc.poll() is None:
+            assert time.monotonic() < deadline
+            time.sleep(0.02)
+        proc.send_signal(signal.SIGSTOP)
+        stored = len(list((killed / "parts").glob("*.parquet")))
+        proc.send_signal(signal.SIGKILL)
+        proc.wait()
+        if stored < 6:           # else a loaded machine let it finish first: try again
+            break
     assert 2 <= stored < 6
     (killed / "parts" / ".abc.parquet.tmp999").write_bytes(b"half a part")   # as a kill leaves
     again = subprocess.run(GNIBENCH + ["run", str(exp), "-o", str(killed), "-j", "1"],
@@ -219,5 +225,6 @@ def test_plain_progress_lines_when_not_a_terminal(tmp_path):
                          env={**os.environ, "COLUMNS": "100"})
     lines = run.stderr.strip().splitlines()
     assert lines[0].startswith("gnibench: tiny: 8 cells")
-    assert sum(line.startswith("[") and "cell " in line for line in lines) == 8
+    done = [ln for ln in lines if re.match(r"\[\d+/8\] \d+ s: cell \d+: ", ln)]
+    assert len(done) == 8            # one per finished cell ("running: ..." lines come with time)
     assert "\r" not in run.stderr
