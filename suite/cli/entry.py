@@ -41,9 +41,12 @@ def main() -> int:
         print("gnibench: " + ("terminated" if signum == signal.SIGTERM else "interrupted"),
               file=sys.stderr)
         _end(128 + signum)
-    if _received:                           # a signal in the last instructions of the imports
-        _end(128 + _received[-1])
-    code = command()
+    try:
+        if _received:                       # a signal in the last instructions of the imports
+            _end(128 + _received[-1])
+        code = command()
+    except KeyboardInterrupt:               # a signal between the command's end and here
+        code = 128 + (_received[-1] if _received else signal.SIGINT)
     if code in (128 + signal.SIGINT, 128 + signal.SIGTERM):
         _end(code)
     return code

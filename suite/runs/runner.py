@@ -135,9 +135,9 @@ def run_experiments(experiments: list[Experiment], outs: list[Path], store_root:
                   flush=True)
             raise
         except OSError as e:          # the disk filled up, say: what is stored stays
-            raise fault(e, "writing the results", f"{len(done)} of {len(unique)} cells are "
-                        f"stored in {store_root}; run the same command again once there is "
-                        f"room") from None
+            raise fault(e, "the run", f"{len(done)} of {len(unique)} cells are stored in "
+                        f"{store_root}; run the same command again once the cause is "
+                        f"removed") from None
         finally:
             progress.close()
     return outs
