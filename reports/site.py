@@ -157,10 +157,9 @@ def _build_site(dirs: list[Path], site: Path, thresholds, benchmarks: Path | Non
     jobs = [(res.dir, img / _unique(res.name, taken), thresholds) for res in found]
     workers = min(os.cpu_count() or 1, len(jobs)) if len(jobs) >= PARALLEL_PAGES else 1
     if workers > 1:          # pages are independent (each draws its own plots): one per process
-        import multiprocessing
-        from concurrent.futures import ProcessPoolExecutor
+        from gnibench.suite.foundation.processes import pool as process_pool
 
-        with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+        with process_pool(workers) as pool:    # Ctrl-C stops the workers at once
             pages = list(pool.map(_page, *zip(*jobs)))
     else:
         pages = [_page(*job) for job in jobs]

@@ -29,10 +29,7 @@ def verify_command(a) -> int:
         raise UserError(f"bad --format {a.format!r}; allowed: text, json")
     claims = select_claims(a.claims)
     if a.list:
-        for c in claims:
-            print(f"{c.id:<24} {c.kind}  {c.how:<14} {c.experiment or c.check or '-':<22} "
-                  f"expected {c.expected}  {c.citation}")
-        return 0
+        return _list(claims, a)
     from gnibench.suite.runs import executors
 
     executors.check(a.executor, a.jobs, a.scheduler)
@@ -42,6 +39,26 @@ def verify_command(a) -> int:
     experiments = _load(needed_experiments(claims, a.scale), a.scale)
     dirs = _run(experiments, out, a)
     return _judge(claims, dirs, out, a)
+
+
+def _list(claims, a) -> int:
+    """``--list``: the claims, as text or JSON; the options of a run do not apply."""
+    given = [name for name, value in (("-o", a.output), ("-j", a.jobs), ("--scheduler", a.scheduler))
+             if value is not None]
+    given += ["--executor"] if a.executor != "local" else []
+    given += ["--no-report"] if a.no_report else []
+    if given:
+        raise UserError(f"{', '.join(given)} {'does' if len(given) == 1 else 'do'} not apply "
+                        f"with --list (nothing is run or written); allowed with --list: claim ids, --format")
+    if a.format == "json":
+        print(json.dumps([{"id": c.id, "kind": c.kind, "how": c.how,
+                           "what": c.experiment or c.check, "expected": c.expected,
+                           "citation": c.citation} for c in claims], indent=1))
+        return 0
+    for c in claims:
+        print(f"{c.id:<24} {c.kind}  {c.how:<14} {c.experiment or c.check or '-':<22} "
+              f"expected {c.expected}  {c.citation}")
+    return 0
 
 
 def _load(names: list[str], scale: str) -> list:
