@@ -18,7 +18,8 @@ and exactly one way of being checked:
 * **measured on runs**: ``experiment = "b-claims-4.2"`` (a shipped experiment id) and
   ``values.<name> = {cells = "label=Euler h=0.1", column = "max_abs_err_H1"}`` (a column of
   ``cells.parquet``) or ``{cells = ..., sample = "err_H1", at = "steps=55"}`` (a column of
-  ``samples.parquet`` at ``last``, ``steps=N``, ``t=T`` (the last sample with t ≤ T), or reduced
+  ``samples.parquet`` at ``last``, ``steps=N``, ``t=T`` (the last sample with t ≤ T of a run that
+  reached T), or reduced
   over the samples: ``max_abs``, ``min``, ``max``); several cells need ``reduce = "max"``
   (min, max, mean, all, any). Then ``measured = "<expression>"`` and ``passes =
   "<expression over measured and the values>"``, optionally ``partly = "<expression>"``.
@@ -32,7 +33,22 @@ and exactly one way of being checked:
   computation (no long integration); it returns named values for ``measured``/``passes``.
 * **an aggregate**: ``all_of = ["B-4.2-g", "B-4.2-h"]``: reproduced when all are (a part not in
   the ledger yet is "not checkable": :func:`missing_parts`).
-* **not checkable**: ``not_checkable = "why"`` (a diagram, a photo, a result of another work).
+* **not checkable**: ``not_checkable = "why"`` (a diagram, a photo, a result of another work, a
+  method of another work in whose place we run ours); ``experiment`` with ``side.<name> = {...}``
+  (as ``values``) shows our own numbers beside the verdict, as a side result.
+
+Optional keys of every entry that reads runs: ``accept = ["step_too_small"]`` (also per value):
+failure statuses that are the claimed behaviour itself (a method breaking down), so the failed
+run's values are measured over what it computed; ``reach = "horizon"``: the experiment records
+all section crossings up to its horizon, the point count being a cap (a run that reached its
+horizon is complete); ``needed = "..."``: what would have been needed to reproduce the claim
+(shown on the ledger page). Otherwise a value from a failed or truncated run, or at a time or
+step the run did not reach, is not measured and the claim not reproduced
+(:mod:`gnibench.suite.ledger.reach`). ``expected`` may also be ``not measured``: not reproduced
+because a run it needs does not complete (a regression record, like every ``expected``).
+Cell selectors: ``field=value`` / ``field~value`` terms joined by ``&``, alternatives by ``|``.
+Ids: those of CLAIMS.md, and ``<id>.corrected`` for the corrected relation of a seed's slip (the
+printed statement keeps the inventory id).
 
 Expressions are those of :mod:`gnibench.suite.ledger.expressions`.
 """
@@ -46,11 +62,12 @@ from importlib import resources
 from gnibench.suite.foundation.errors import UserError
 from gnibench.suite.ledger import expressions
 
-VERDICTS = ("reproduced", "not reproduced", "partly", "not checkable")
+VERDICTS = ("reproduced", "not reproduced", "partly", "not checkable", "not measured")
 KEYS = ("id", "kind", "citation", "claim", "seed_value", "threshold", "expected", "figure",
         "reading", "note", "experiment", "values", "measured", "passes", "partly", "sweep",
-        "closed_form", "cells", "check", "all_of", "not_checkable", "scale")
-VALUE_KEYS = ("cells", "column", "sample", "at", "reduce")
+        "closed_form", "cells", "check", "all_of", "not_checkable", "scale", "accept", "reach",
+        "needed", "side")
+VALUE_KEYS = ("cells", "column", "sample", "at", "reduce", "accept")
 REDUCE = ("min", "max", "mean", "all", "any", "sum")
 _ID = re.compile(r"^(B|HLW)-[A-Za-z0-9.\-]+$")
 
@@ -81,7 +98,11 @@ class Claim:
     check: str = ""
     all_of: tuple[str, ...] = ()
     not_checkable: str = ""
-    scale: str = ""                      # "paper": not checkable at the quick scale
+    scale: str = ""                      # "paper": skipped at the quick scale
+    accept: tuple[str, ...] = ()         # failure statuses that are the claimed behaviour itself
+    reach: str = ""                      # "horizon": a section run's point count is only a cap
+    needed: str = ""                     # what would have been needed to reproduce it (words)
+    side: dict = field(default_factory=dict)   # values shown beside a not-checkable verdict
 
     @property
     def how(self) -> str:
@@ -171,6 +192,7 @@ def _claim(entry: dict, source: str) -> Claim:
     values = {}
     for name, spec in entry.get("values", {}).items():
         values[name] = _value(spec, f"{where}: values.{name}")
+    side = {name: _value(spec, f"{where}: side.{name}") for name, spec in entry.get("side", {}).items()}
     return Claim(
         id=entry["id"], kind=entry["kind"], citation=entry["citation"], claim=entry["claim"],
         seed_value=str(entry.get("seed_value", "")), threshold=threshold, expected=expected,
@@ -180,7 +202,9 @@ def _claim(entry: dict, source: str) -> Claim:
         partly=entry.get("partly", ""), sweep=entry.get("sweep", ""),
         closed_form=entry.get("closed_form", ""), cells=entry.get("cells", ""),
         check=entry.get("check", ""), all_of=tuple(entry.get("all_of", ())),
-        not_checkable=entry.get("not_checkable", ""), scale=entry.get("scale", ""))
+        not_checkable=entry.get("not_checkable", ""), scale=entry.get("scale", ""),
+        accept=tuple(entry.get("accept", ())), reach=entry.get("reach", ""),
+        needed=entry.get("needed", ""), side=side)
 
 
 def _value(spec, where: str) -> dict:
