@@ -263,7 +263,9 @@ def run_mutants(mutants: list[Mutant], out: Path, scale: str = "quick", jobs: in
     doc = {"scale": scale, "claims": claims, "tests": tests, "mutants": results,
            "killed": killed, "total": len(results),
            "score": killed / len(results) if results else None,
-           "baseline": {"exit": base["exit"], "unexpected": noisy, "seconds": base["seconds"]}}
+           "baseline": {"exit": base["exit"], "unexpected": noisy, "seconds": base["seconds"],
+                        "verdicts": {v: sum(r["verdict"] == v for r in base["rows"])
+                                     for v in dict.fromkeys(r["verdict"] for r in base["rows"])}}}
     (out / "mutants.json").write_text(json.dumps(doc, indent=1, ensure_ascii=False) + "\n",
                                       encoding="utf-8")
     if not keep:
