@@ -108,7 +108,8 @@ def mutants_command(a) -> int:
     """``gnibench verify [ID...] --mutants [M1,M2,...]``: mutation testing of the ledger
     (:mod:`gnibench.suite.ledger.mutants`): the baseline and each mutant on a copy of the package;
     prints which claims or tests killed each mutant, writes ``DIR/mutants.json`` (default DIR:
-    results/mutants), exit 0 when every mutant was killed, 1 when some survived."""
+    results/seeds, beside the ledger, so that its report page shows the score), exit 0 when every
+    mutant was killed, 1 when some survived."""
     from gnibench.suite.ledger import mutants
     from gnibench.suite.ledger.verify import select_claims
 
@@ -127,7 +128,9 @@ def mutants_command(a) -> int:
                 raise unknown("mutant", n, known)
         chosen = [known[n] for n in names]
     claims = [c.id for c in select_claims(a.claims)] if a.claims and a.claims != ["all"] else []
-    out = a.output if a.output is not None else Path("results") / "mutants"
+    from gnibench.suite.runs.reproduce import DEFAULT_DIR
+
+    out = a.output if a.output is not None else DEFAULT_DIR
     doc = mutants.run_mutants(chosen, out, scale=a.scale, jobs=a.jobs or 2, claims=claims or None,
                               log=lambda s: print(s, file=sys.stderr))
     for m in doc["mutants"]:
