@@ -199,3 +199,23 @@ def test_fixed_point_implicit_euler():
 def test_verdict_order_counts_every_verdict():
     assert set(verdicts.VERDICT_ORDER) >= {"reproduced", "partly", "not reproduced",
                                            "not checkable", "skipped", "error"}
+
+
+def test_the_ledger_page_shows_the_mutation_score_and_the_survivors(tmp_path):
+    import json
+
+    from gnibench.reports.ledger import ledger_context, mutation_summary, render_ledger
+
+    doc = {"scale": "quick", "score": 0.5, "mutants": [
+        {"id": "a", "file": "f.py", "description": "bug a", "killed": True, "claims": ["B-4.2-d"],
+         "tests": []},
+        {"id": "b", "file": "g.py", "description": "bug b", "killed": False, "claims": [],
+         "tests": [], "blind_spot": "no claim reads it"}]}
+    (tmp_path / "mutants.json").write_text(json.dumps(doc))
+    summary = mutation_summary(tmp_path)
+    assert summary["killed"] == 1 and summary["total"] == 2
+    v = evaluate(_claim(COLUMN), _Fake(_tables()), {})
+    md = render_ledger(pd.DataFrame([v.row()]), {"scale": "quick"}, summary)
+    assert "1 of 2 mutants" in md and "survived: `b`" in md and "no claim reads it" in md
+    assert ledger_context(pd.DataFrame([v.row()]), {}, set(), summary)["mutants"]["total"] == 2
+    assert mutation_summary(tmp_path / "nowhere") is None
