@@ -66,8 +66,12 @@ def test_a_value_at_a_time_the_run_did_not_reach_is_not_measured():
     assert v.outcome == "not measured" and "t=20 was not reached" in v.detail
     body = body.replace("t=20", "t=5")
     assert evaluate(_claim(body), _Fake(_tables()), {}).verdict == "reproduced"
+    off_grid = evaluate(_claim(body.replace("t=5", "t=5.5")), _Fake(_tables()), {})
+    assert off_grid.outcome == "not measured" and "nearest before is at t=5" in off_grid.detail
     body = body.replace("t=5", "steps=2000")
     assert evaluate(_claim(body), _Fake(_tables()), {}).outcome == "not measured"
+    assert evaluate(_claim(body.replace("steps=2000", "steps=550")), _Fake(_tables()),
+                    {}).outcome == "not measured"            # samples every 100 steps
 
 
 def test_a_section_run_short_of_its_points_is_truncated_unless_the_horizon_is_the_ask():

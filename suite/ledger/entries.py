@@ -18,8 +18,8 @@ and exactly one way of being checked:
 * **measured on runs**: ``experiment = "b-claims-4.2"`` (a shipped experiment id) and
   ``values.<name> = {cells = "label=Euler h=0.1", column = "max_abs_err_H1"}`` (a column of
   ``cells.parquet``) or ``{cells = ..., sample = "err_H1", at = "steps=55"}`` (a column of
-  ``samples.parquet`` at ``last``, ``steps=N``, ``t=T`` (the last sample with t ≤ T of a run that
-  reached T), or reduced
+  ``samples.parquet`` at ``last``, ``steps=N``, ``t=T`` (the sample at T of a run that reached T,
+  to 1e-9 relative; none: not measured), or reduced
   over the samples: ``max_abs``, ``min``, ``max``); several cells need ``reduce = "max"``
   (min, max, mean, all, any). Then ``measured = "<expression>"`` and ``passes =
   "<expression over measured and the values>"``, optionally ``partly = "<expression>"``.

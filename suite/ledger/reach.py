@@ -11,8 +11,8 @@ value is *measured* only when the part of the run it reads was computed:
   too, unless the claim declares ``reach = "horizon"`` (its experiment records all crossings up
   to the horizon, the count being only a cap, as for so(4) in [B] §7.2);
 * a value read at ``t = T`` or ``steps = N`` needs a run that got there (a complete run with a
-  shorter horizon, e.g. at the quick scale, does not), and reads the last sample with t ≤ T
-  (steps ≤ N), i.e. within one sampling interval of T.
+  shorter horizon, e.g. at the quick scale, does not) and a sample there (t within 1e-9 of T
+  relative, steps exactly N): never the last sample before it.
 
 Otherwise :class:`NotMeasured` is raised with the reason (which cell, its status, where it
 stopped); the claim's verdict is then "not reproduced" with that reason. A value may name the
@@ -138,4 +138,8 @@ def at_sample(column: np.ndarray, rows: pd.DataFrame, at: str, run: Run) -> floa
     idx = np.nonzero(where <= target * (1 + 1e-12))[0]
     if not len(idx):
         raise NotMeasured(f"no sample at or before {at}: {run.describe()}")
+    got = float(where[idx[-1]])
+    if abs(got - target) > 1e-9 * max(abs(target), 1.0):
+        raise NotMeasured(f"no sample at {at} (the nearest before is at {key}={got:.10g}): "
+                          f"{run.describe()}")
     return float(column[idx[-1]])
