@@ -14,7 +14,8 @@ replacement, what it does and why it is plausible. For each mutant, :func:`run_m
    template gets a new key and compiles, an untouched one loads; every cache write is a rename,
    so nothing the mutant writes reaches the seed; reference solutions are not seeded, since their
    key does not cover the code that computes them) and its own results directory;
-3. runs the catalog's fast tests on the copy the same way;
+3. runs the catalog's fast tests on the copy the same way, when the ledger did not already kill
+   the mutant (the tests must pass on the baseline);
 4. calls the mutant *killed* when a claim's verdict differs from its expected one (or is
    ``error``) where the unmutated baseline's did not, when a test fails, or when the ledger run
    itself fails (exit code other than 0 and 1, or the time limit: a hang is noticed too).
@@ -187,9 +188,12 @@ def _tests(copy: Path, env: dict, tests: list[str], jobs: int, timeout: float) -
 
 
 def run_one(mutant: Mutant | None, work: Path, scale: str, jobs: int, claims: list[str],
-            tests: list[str], seed: Path | None, timeout: float) -> dict:
+            tests: list[str], seed: Path | None, timeout: float,
+            baseline: dict | None = None) -> dict:
     """Run the ledger and the tests on a copy of the package with ``mutant`` applied (None: the
-    unmutated baseline). Returns the raw outcome (see :func:`judge_mutant`)."""
+    unmutated baseline). With ``baseline``, the tests run only when the ledger did not already
+    kill the mutant (they cost as much as the ledger). Returns the raw outcome (see
+    :func:`judge_mutant`)."""
     name = mutant.id if mutant else "baseline"
     home = work / name
     if home.exists():
@@ -204,10 +208,13 @@ def run_one(mutant: Mutant | None, work: Path, scale: str, jobs: int, claims: li
     env = _env(home, cache)
     _imports_copy(home, env)
     code, rows, last = _verify(home, env, home / "out", scale, jobs, claims, timeout)
-    test_code, failed = _tests(copy, env, tests, jobs, timeout)
-    return {"id": name, "exit": code, "rows": rows, "stderr": last, "tests_exit": test_code,
-            "tests_failed": failed, "seconds": round(time.perf_counter() - start, 1),
-            "cache": str(cache), "home": str(home)}
+    raw = {"id": name, "exit": code, "rows": rows, "stderr": last, "tests_exit": None,
+           "tests_failed": [], "tests_run": False, "cache": str(cache), "home": str(home)}
+    if baseline is None or not judge_mutant(raw, baseline)["killed"]:
+        raw["tests_exit"], raw["tests_failed"] = _tests(copy, env, tests, jobs, timeout)
+        raw["tests_run"] = bool(tests)
+    raw["seconds"] = round(time.perf_counter() - start, 1)
+    return raw
 
 
 def judge_mutant(raw: dict, baseline: dict) -> dict:
@@ -246,12 +253,16 @@ def run_mutants(mutants: list[Mutant], out: Path, scale: str = "quick", jobs: in
     base = run_one(None, work, scale, jobs, claims, tests, baseline_seed, timeout)
     if base["exit"] not in (0, 1) or not base["rows"]:
         raise UserError(f"the unmutated baseline failed ({base['stderr']}); see {base['home']}")
+    if base["tests_failed"]:
+        raise UserError(f"the catalog's tests fail on the unmutated baseline: "
+                        f"{', '.join(base['tests_failed'][:5])}; see {base['home']}")
     noisy = sorted(r["id"] for r in base["rows"] if r.get("unexpected"))
     results = []
     for k, m in enumerate(mutants, start=1):
-        raw = run_one(m, work, scale, jobs, claims, tests, Path(base["cache"]), timeout)
+        raw = run_one(m, work, scale, jobs, claims, tests, Path(base["cache"]), timeout, base)
         verdict = judge_mutant(raw, base)
-        row = {**asdict(m), **verdict, "seconds": raw["seconds"], "exit": raw["exit"]}
+        row = {**asdict(m), **verdict, "seconds": raw["seconds"], "exit": raw["exit"],
+               "tests_run": raw["tests_run"]}
         row.pop("original"), row.pop("replacement")
         results.append(row)
         by = ", ".join(verdict["claims"][:6] + verdict["tests"][:3]) or verdict["crash"]
