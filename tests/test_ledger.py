@@ -11,8 +11,9 @@ import numpy as np
 import pandas as pd
 import pytest
 from gnibench.suite.cli.main import main
+from gnibench.suite.foundation import expressions
 from gnibench.suite.foundation.errors import UserError
-from gnibench.suite.ledger import closed_forms, entries, expressions, identities
+from gnibench.suite.ledger import closed_forms, entries, identities
 from gnibench.suite.ledger.entries import load_ledger, parse_claims
 from gnibench.suite.ledger.verdicts import select
 

@@ -233,20 +233,21 @@ def implicit_euler_solar_system(cells, samples) -> dict:
     of the sun before Saturn does and both end ≥ 50 AU away (CLAIMS.md), with each cell's
     ``jupiter_fall_<K>``, ``saturn_fall_<K>``, ``final_r_<K>``, ``unconverged_<K>`` (steps whose
     iteration did not converge, njev)."""
-    from gnibench.suite.cell.spec import parse_item, parse_problem, split_method
+    from gnibench.suite.cell.spec import parse_method, parse_problem
     from gnibench.suite.ledger.reach import NotMeasured
 
     out: dict[str, float] = {}
     good, fixed = 0, 0
     for row in cells.itertuples():
-        name, opts = parse_item(split_method(row.method)[0], "method")
-        if name != "implicit-euler":
+        method = parse_method(row.method)
+        if method.id != "implicit-euler" or method.modifiers:
             raise ValueError(f"select implicit Euler cells, not {row.method}")
-        k = int(float(opts.get("fixed_point", 0)))
+        k = int(method.base.values.get("fixed_point", 0))
         if k == 0:
             out["newton_failed"] = float(row.status == "newton_failed")
             values = dict(parse_problem(row.problem).values)
-            out.update(_implicit_euler_gap(_rows(samples, row.cell), values, float(opts["h"])))
+            out.update(_implicit_euler_gap(_rows(samples, row.cell), values,
+                                           float(method.base.values["h"])))
             continue
         if row.status != "ok":
             raise NotMeasured(f"the fixed-point cell {row.cell} ({row.method}) ended {row.status} "

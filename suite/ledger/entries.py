@@ -50,59 +50,125 @@ Cell selectors: ``field=value`` / ``field~value`` terms joined by ``&``, alterna
 Ids: those of CLAIMS.md, and ``<id>.corrected`` for the corrected relation of a seed's slip (the
 printed statement keeps the inventory id).
 
-Expressions are those of :mod:`gnibench.suite.ledger.expressions`.
+The keys, their types, defaults and what each allows are the fields of :class:`Claim` and
+:class:`Value` below (a new key is one line there; the README's table of claim keys is rendered
+from them); the rules between keys are :meth:`Claim._one_way`. Expressions are those of
+:mod:`gnibench.suite.foundation.expressions` (bounded, checked when the ledger is read).
 """
 from __future__ import annotations
 
+import math
 import re
-import tomllib
-from dataclasses import dataclass, field
 from importlib import resources
+from typing import Annotated, Literal
 
+from gnibench.suite.foundation import expressions
 from gnibench.suite.foundation.errors import UserError
-from gnibench.suite.ledger import expressions
+from gnibench.suite.foundation.records import Allowed, Line, NonEmptyLine, Record, Text, key, validate
+from gnibench.suite.foundation.tomlfile import load_toml
+from pydantic import AfterValidator, Field, PrivateAttr, model_validator
 
 VERDICTS = ("reproduced", "not reproduced", "partly", "not checkable", "not measured")
-KEYS = ("id", "kind", "citation", "claim", "seed_value", "threshold", "expected", "figure",
-        "reading", "note", "experiment", "values", "measured", "passes", "partly", "sweep",
-        "closed_form", "cells", "check", "all_of", "not_checkable", "scale", "accept", "reach",
-        "needed", "side")
-VALUE_KEYS = ("cells", "column", "sample", "at", "reduce", "accept")
+#: the failure statuses a claim may accept as its claimed behaviour (suite/foundation/status.py)
+FAILURES = ("nonfinite", "newton_failed", "max_steps", "step_too_small")
 REDUCE = ("min", "max", "mean", "all", "any", "sum")
-_ID = re.compile(r"^(B|HLW)-[A-Za-z0-9.\-]+$")
+_AT = re.compile(r"^(last|max_abs|min|max|[A-Za-z_][A-Za-z0-9_]*=[-+]?(\d+\.?\d*|\.\d+)"
+                 r"([eE][-+]?\d{1,3})?)$")
 
 
-@dataclass(frozen=True)
-class Claim:
-    """One validated ledger entry (see the module docstring)."""
+def _expression(text: str) -> str:
+    try:
+        expressions.parse(text, "expression")     # bounded; refused here, before any run
+    except UserError as e:
+        raise ValueError(str(e).removeprefix("expression: ")) from None
+    return text
 
-    id: str
-    kind: str
-    citation: str
-    claim: str
-    seed_value: str
-    threshold: str
-    expected: str
-    source: str
-    figure: str = ""
-    reading: str = ""
-    note: str = ""
-    experiment: str = ""
-    values: dict = field(default_factory=dict)
-    measured: str = ""
-    passes: str = ""
-    partly: str = ""
-    sweep: str = ""
-    closed_form: str = ""
-    cells: str = ""
-    check: str = ""
-    all_of: tuple[str, ...] = ()
-    not_checkable: str = ""
-    scale: str = ""                      # "paper": skipped at the quick scale
-    accept: tuple[str, ...] = ()         # failure statuses that are the claimed behaviour itself
-    reach: str = ""                      # "horizon": a section run's point count is only a cap
-    needed: str = ""                     # what would have been needed to reproduce it (words)
-    side: dict = field(default_factory=dict)   # values shown beside a not-checkable verdict
+
+def _at(text: str) -> str:
+    if not _AT.match(text) or "=" in text and not math.isfinite(float(text.partition("=")[2])):
+        raise ValueError(f"bad at = {text[:60]!r}; allowed: last, max_abs, min, max, steps=N, "
+                         f"t=T (a column = a finite number)")
+    return text
+
+
+Expression = Annotated[str, Allowed("a safe expression (suite/foundation/expressions.py)"),
+                       Field(max_length=expressions.MAX_CHARS), AfterValidator(_expression)]
+Name = Annotated[str, Field(pattern=r"^[A-Za-z_][A-Za-z0-9_]*$", max_length=64)]
+
+
+class Value(Record):
+    """``values.<name> = {...}``: a number read from the tables of the claim's experiment."""
+
+    cells: Line = key(doc="the cells (a selector: label=..., method~..., & between terms)")
+    column: Line | None = key(None, "a column of cells.parquet (a per-cell metric)")
+    sample: Line | None = key(None, "a column of samples.parquet")
+    at: Annotated[Line, AfterValidator(_at)] | None = key(
+        None, "which sample: last (default), steps=N, t=T, or reduced: max_abs, min, max")
+    reduce: Literal[REDUCE] | None = key(None, "over several cells (default max)")
+    accept: Annotated[list[Literal[FAILURES]], Field(max_length=4)] | None = key(
+        None, "failure statuses that are the claimed behaviour: the failed run is measured over "
+              "what it computed")
+
+    @model_validator(mode="after")
+    def _one_column(self):
+        if (self.column is None) == (self.sample is None):
+            raise ValueError("give exactly one of column (cells.parquet) or sample "
+                             "(samples.parquet)")
+        return self
+
+
+def _plain(value: Value) -> dict:
+    return value.model_dump(exclude_none=True)
+
+
+class Claim(Record):
+    """One ledger entry (``[[claim]]``; see the module docstring)."""
+
+    id: Annotated[str, Field(pattern=r"^(B|HLW)-[A-Za-z0-9.\-]+$", max_length=80)] = key(
+        doc="as in CLAIMS.md", allowed="B-... or HLW-... as in CLAIMS.md")
+    kind: Literal["E", "I"] = key(doc="E: needs a run; I: an identity or structure")
+    citation: NonEmptyLine = key(doc="the place in the seed")
+    claim: NonEmptyLine = key(doc="the claim in our own words")
+    seed_value: Line = key("", "what the seed says, as text")
+    threshold: Literal["seed", "proposed", "closed form", "none"] = key(
+        "proposed", "whose number the pass criterion uses")
+    expected: Literal[VERDICTS] = key("reproduced", "the verdict we expect (known deficiencies: "
+                                                    "another)")
+    figure: Line = key("", "the figure it belongs to (a link)")
+    reading: Text = key("", "a doubtful OCR reading and the one used")
+    note: Text = key("", "a note")
+    experiment: Line = key("", "the shipped experiment whose runs it reads")
+    values: Annotated[dict[Name, Annotated[Value, AfterValidator(_plain)]],
+                      Field(max_length=64)] = key({}, "named numbers read from the tables",
+                                                  "a table name = {cells, column | sample, at, "
+                                                  "reduce}")
+    measured: Expression = key("", "the measured number: an expression over the values")
+    passes: Expression = key("", "the pass criterion: an expression over measured and the values")
+    partly: Expression = key("", "a weaker criterion (verdict partly)")
+    sweep: Line = key("", "judge once per value of this column of the selected cells")
+    closed_form: Line = key("", "a registered closed form (suite/ledger/closed_forms.py)")
+    cells: Line = key("", "the cells a closed form is compared with")
+    check: Line = key("", "a registered identity (suite/ledger/identities.py)")
+    all_of: Annotated[list[NonEmptyLine], Field(max_length=200), AfterValidator(tuple)] = key(
+        (), "an aggregate: reproduced when all these claims are", "a list of claim ids")
+    not_checkable: Text = key("", "why it cannot be checked")
+    scale: Literal["", "paper"] = key("", "paper: skipped at the quick scale", "paper")
+    accept: Annotated[list[Literal[FAILURES]], Field(max_length=4), AfterValidator(tuple)] = key(
+        (), "failure statuses that are the claimed behaviour (all the entry's cells)")
+    reach: Literal["", "horizon"] = key(
+        "", "horizon: a section run that reached its horizon is complete (the count is a cap)")
+    needed: Text = key("", "what would have been needed to reproduce the claim")
+    side: Annotated[dict[Name, Annotated[Value, AfterValidator(_plain)]],
+                    Field(max_length=64)] = key({}, "a not-checkable entry's side result: "
+                                                    "numbers read as values are",
+                                                "a table name = {cells, column | sample, at, "
+                                                "reduce}")
+    _source: str = PrivateAttr("")
+
+    @property
+    def source(self) -> str:
+        """The file the entry comes from."""
+        return self._source
 
     @property
     def how(self) -> str:
@@ -110,6 +176,28 @@ class Claim:
             if getattr(self, name):
                 return name
         return "measured"
+
+    @model_validator(mode="after")
+    def _one_way(self):
+        given = self.model_fields_set
+        ways = [k for k in ("check", "closed_form", "all_of", "not_checkable") if k in given]
+        if "values" in given or ("passes" in given and not ways):
+            ways.append("measured")
+        if len(ways) != 1:
+            raise ValueError(f"give exactly one of values (+ measured, passes), check, "
+                             f"closed_form, all_of, not_checkable; got {ways or 'none'}")
+        how = ways[0]
+        if how in ("measured", "closed_form") and not self.experiment:
+            raise ValueError("needs experiment = <shipped experiment id>")
+        if how in ("measured", "check", "closed_form") and "passes" not in given:
+            raise ValueError("needs passes = <expression>")
+        if how == "measured":
+            if "measured" not in given:
+                raise ValueError("needs measured = <expression over the values>")
+            missing = expressions.parse(self.measured, "measured").names - set(self.values)
+            if missing:
+                raise ValueError(f"measured uses unknown names {sorted(missing)}")
+        return self
 
 
 def shipped_files() -> dict[str, str]:
@@ -138,85 +226,17 @@ def missing_parts(ledger: dict[str, Claim]) -> dict[str, list[str]]:
 
 
 def parse_claims(text: str, source: str) -> list[Claim]:
-    try:
-        doc = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as e:
-        raise UserError(f"{source}: not valid TOML: {e}") from None
+    doc = load_toml(text, source)
     if set(doc) - {"claim"}:
         raise UserError(f"{source}: unknown top-level keys {sorted(set(doc) - {'claim'})}; "
                         f"allowed: [[claim]] entries")
-    return [_claim(entry, source) for entry in doc.get("claim", [])]
-
-
-def _claim(entry: dict, source: str) -> Claim:
-    where = f"{source}: claim {entry.get('id', '?')}"
-    unknown = set(entry) - set(KEYS)
-    if unknown:
-        raise UserError(f"{where}: unknown keys {sorted(unknown)}; allowed: {', '.join(KEYS)}")
-    for key in ("id", "kind", "citation", "claim"):
-        if not isinstance(entry.get(key), str) or not entry[key].strip():
-            raise UserError(f"{where}: missing {key} (a non-empty string)")
-    if not _ID.match(entry["id"]):
-        raise UserError(f"{where}: bad id; allowed: B-... or HLW-... as in CLAIMS.md")
-    if entry["kind"] not in ("E", "I"):
-        raise UserError(f"{where}: bad kind {entry['kind']!r}; allowed: E, I")
-    expected = entry.get("expected", "reproduced")
-    if expected not in VERDICTS:
-        raise UserError(f"{where}: bad expected {expected!r}; allowed: {', '.join(VERDICTS)}")
-    threshold = entry.get("threshold", "proposed")
-    if threshold not in ("seed", "proposed", "closed form", "none"):
-        raise UserError(f"{where}: bad threshold {threshold!r}; allowed: seed, proposed, "
-                        f"closed form, none")
-    ways = [k for k in ("check", "closed_form", "all_of", "not_checkable") if k in entry]
-    if "values" in entry or ("passes" in entry and not ways):
-        ways.append("measured")
-    if len(ways) != 1:
-        raise UserError(f"{where}: give exactly one of values (+ measured, passes), check, "
-                        f"closed_form, all_of, not_checkable; got {ways or 'none'}")
-    how = ways[0]
-    if how in ("measured", "closed_form") and not entry.get("experiment"):
-        raise UserError(f"{where}: needs experiment = <shipped experiment id>")
-    if how in ("measured", "check", "closed_form"):
-        if "passes" not in entry:
-            raise UserError(f"{where}: needs passes = <expression>")
-        known = set(entry.get("values", {})) | {"measured"}
-        for key in ("measured", "passes", "partly"):
-            if key in entry:
-                expressions.parse(entry[key], f"{where}: {key}")
-        if how == "measured":
-            if "measured" not in entry:
-                raise UserError(f"{where}: needs measured = <expression over the values>")
-            missing = expressions.names(expressions.parse(entry["measured"], where)) - known
-            if missing:
-                raise UserError(f"{where}: measured uses unknown names {sorted(missing)}")
-    values = {}
-    for name, spec in entry.get("values", {}).items():
-        values[name] = _value(spec, f"{where}: values.{name}")
-    side = {name: _value(spec, f"{where}: side.{name}") for name, spec in entry.get("side", {}).items()}
-    return Claim(
-        id=entry["id"], kind=entry["kind"], citation=entry["citation"], claim=entry["claim"],
-        seed_value=str(entry.get("seed_value", "")), threshold=threshold, expected=expected,
-        source=source, figure=entry.get("figure", ""), reading=entry.get("reading", ""),
-        note=entry.get("note", ""), experiment=entry.get("experiment", ""), values=values,
-        measured=entry.get("measured", ""), passes=entry.get("passes", ""),
-        partly=entry.get("partly", ""), sweep=entry.get("sweep", ""),
-        closed_form=entry.get("closed_form", ""), cells=entry.get("cells", ""),
-        check=entry.get("check", ""), all_of=tuple(entry.get("all_of", ())),
-        not_checkable=entry.get("not_checkable", ""), scale=entry.get("scale", ""),
-        accept=tuple(entry.get("accept", ())), reach=entry.get("reach", ""),
-        needed=entry.get("needed", ""), side=side)
-
-
-def _value(spec, where: str) -> dict:
-    if not isinstance(spec, dict) or "cells" not in spec:
-        raise UserError(f"{where}: allowed: {{cells = ..., column = ...}} or "
-                        f"{{cells = ..., sample = ..., at = ...}}")
-    unknown = set(spec) - set(VALUE_KEYS)
-    if unknown:
-        raise UserError(f"{where}: unknown keys {sorted(unknown)}; allowed: {', '.join(VALUE_KEYS)}")
-    if ("column" in spec) == ("sample" in spec):
-        raise UserError(f"{where}: give exactly one of column (cells.parquet) or sample "
-                        f"(samples.parquet)")
-    if spec.get("reduce", "max") not in REDUCE:
-        raise UserError(f"{where}: bad reduce {spec['reduce']!r}; allowed: {', '.join(REDUCE)}")
-    return dict(spec)
+    entries = doc.get("claim", [])
+    if not isinstance(entries, list):
+        raise UserError(f"{source}: bad claim; allowed: [[claim]] entries")
+    claims = []
+    for entry in entries:
+        ident = entry.get("id", "?") if isinstance(entry, dict) else "?"
+        claim = validate(Claim, entry, f"{source}: claim {str(ident)[:80]}")
+        claim._source = source
+        claims.append(claim)
+    return claims

@@ -8,14 +8,14 @@ from __future__ import annotations
 import ast
 import math
 
-from gnibench.suite.ledger import expressions
+from gnibench.suite.foundation import expressions
 
 _OPS = {ast.Lt: "<", ast.LtE: "≤", ast.Gt: ">", ast.GtE: "≥", ast.Eq: "=", ast.NotEq: "≠"}
 
 
-def conjuncts(tree: ast.Expression) -> list[ast.AST]:
-    """The top-level ``and`` terms of an expression."""
-    out, todo = [], [tree.body]
+def conjuncts(expression) -> list[ast.AST]:
+    """The top-level ``and`` terms of a parsed expression."""
+    out, todo = [], [expression.tree.body]
     while todo:
         node = todo.pop(0)
         if isinstance(node, ast.BoolOp) and isinstance(node.op, ast.And):
@@ -23,6 +23,13 @@ def conjuncts(tree: ast.Expression) -> list[ast.AST]:
         else:
             out.append(node)
     return out
+
+
+def _part(node: ast.AST) -> expressions.Expression:
+    """A sub-tree of a checked expression as an expression of its own."""
+    calls = {id(n.func) for n in ast.walk(node) if isinstance(n, ast.Call)}
+    read = frozenset(n.id for n in ast.walk(node) if isinstance(n, ast.Name) and id(n) not in calls)
+    return expressions.Expression(ast.unparse(node), ast.Expression(body=node), read)
 
 
 def _num(x) -> str:
@@ -41,13 +48,12 @@ def failing(text: str, values: dict, where: str = "passes") -> list[tuple[str, f
     """The failing conjuncts of ``text`` as (description, factor off), in order."""
     out = []
     for node in conjuncts(expressions.parse(text, where)):
-        expr = ast.Expression(body=node)
-        if expressions.evaluate(expr, values):
+        if expressions.evaluate(_part(node), values):
             continue
         src = ast.unparse(node)
         if isinstance(node, ast.Compare) and len(node.ops) == 1:
-            a = expressions.evaluate(ast.Expression(body=node.left), values)
-            b = expressions.evaluate(ast.Expression(body=node.comparators[0]), values)
+            a = expressions.evaluate(_part(node.left), values)
+            b = expressions.evaluate(_part(node.comparators[0]), values)
             needs = f"needs {ast.unparse(node.left)} {_OPS[type(node.ops[0])]} {_num(b)}"
             out.append((f"{src} fails: {ast.unparse(node.left)} = {_num(a)}; {needs}",
                         _factor(a, b)))

@@ -25,7 +25,8 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from gnibench.suite.ledger import closed_forms, expressions, identities, misses
+from gnibench.suite.foundation import expressions
+from gnibench.suite.ledger import closed_forms, identities, misses
 from gnibench.suite.ledger.entries import Claim
 from gnibench.suite.ledger.reach import NotMeasured, Run, at_sample, require_complete, runs_of
 

@@ -1,34 +1,12 @@
 """Experiment files: a TOML description of a matrix of cells, validated before anything runs.
 
 An experiment is a TOML file, given by path or by the name of one shipped in
-``suite/experiments/`` (``gnibench run quick``). Schema (also in ``suite/experiments/README.md``)::
-
-    name        = "hlw-fig-1.4"      # required; letters, digits, . _ -; output dir results/<name>
-    title       = "..."              # required, one line
-    reference   = "[HLW] Fig 1.4"    # required: the place in the seeds
-    description = "..."              # optional; (choice) notes go here
-    t_end = 10.0                     # default horizon of every group: t_end OR steps
-    every = 1                        # default sampling: a sample every K steps (plus the last)
-    metrics = ["growth:of=H"]        # optional: metrics beside the defaults (gnibench list metrics)
-    dt_out = 0.5                     # optional: samples at t = k dt_out (every K-th) plus the last
-    reference_solution = "heyoka:precision=long double"   # optional: what global_error is
-                                     # measured against (exact | heyoka[:...] | rebound[:...] | none)
-    section = 10000                  # optional: the first N crossings of the problem's Poincaré
-                                     # section up to the horizon, instead of samples
-
-    [[cells]]                        # a group; the cells are problems x methods x vary values
-    label    = "symplectic Euler"    # optional, shown in the summary
-    problems = ["pendulum:q0=0"]     # PROBLEM spec strings (README: spec strings)
-    methods  = ["symplectic-euler:h=0.3"]
-    steps = 100                      # optional: replaces the top-level horizon for this group
-    every = 1                        # optional
-    metrics = ["precession"]         # optional: replaces the top-level metrics for this group
-    dt_out = 0.5                     # optional: replaces the top-level time grid for this group
-    reference_solution = "exact"     # optional: replaces the top-level reference for this group
-    section = 10000                  # optional: replaces the top-level section for this group
-    vary.h = [0.3, 0.15]             # a base-method option, one cell per value
-    vary.problem.p0 = [0.7, 1.4]     # a problem option
-    vary.observer.theta = [1, 15]    # an option of a modifier (only methods that have it)
+``suite/experiments/``
+(``gnibench run quick``). Its keys, types, bounds and defaults are typed records in
+:mod:`gnibench.suite.runs.experiment_schema` (tables in ``suite/experiments/README.md``, rendered
+from them); the whole file, every scale included, is validated against them first (one line naming
+the key's path on a bad value or an unknown key), then the chosen scale is applied
+(:mod:`gnibench.suite.runs.scales`) and each group expands into cells here.
 
 A ``vary`` value overrides the same option written in a spec. Values are numbers, strings,
 booleans, or lists of numbers (written ``a/b`` in the spec). The cells of a group are the product
@@ -43,60 +21,20 @@ that applies to some cells of a group only is computed where it applies; the oth
 from __future__ import annotations
 
 import itertools
-import math
-import re
-import tomllib
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from gnibench.suite.cell.spec import parse_item, split_method
-from gnibench.suite.foundation.budgets import INT_LIMIT, check_count
+from gnibench.suite.cell.spec import structure, with_options
+from gnibench.suite.foundation.budgets import check_count
 from gnibench.suite.foundation.errors import UserError, unknown
 from gnibench.suite.foundation.params import format_float
+from gnibench.suite.foundation.tomlfile import MAX_CHARS, load_toml
+from gnibench.suite.runs.cell import Cell
 
-TOP_KEYS = ("name", "title", "reference", "description", "t_end", "steps", "every", "dt_out",
-            "metrics", "reference_solution", "section", "cells", "scale", "figure")
-GROUP_KEYS = ("label", "problems", "methods", "t_end", "steps", "every", "dt_out", "metrics",
-              "reference_solution", "section", "vary", "points", "scale")
-_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]*$")
-
-
-@dataclass(frozen=True)
-class Cell:
-    """One problem x method x horizon: the unit of work of the runner.
-
-    ``problem_spec``/``method_spec`` are the texts given to :func:`gnibench.suite.cell.solve.solve`;
-    ``problem``/``method`` are their canonical texts (what the tables show); ``metrics`` the
-    canonical texts of the chosen metrics (beside the default ones); ``reference`` the canonical
-    text of the chosen reference solution (:func:`gnibench.suite.cell.reference.parse_reference`:
-    ``exact``, ``heyoka:precision=...,tol=...``, ``rebound:tol=...`` or ``none``), None for the
-    default (the exact solution where the problem has one).
-    """
-
-    id: int
-    group: int
-    label: str
-    problem_spec: str
-    method_spec: str
-    problem: str
-    method: str
-    h: float
-    steps: int | None
-    t_end: float | None
-    every: int
-    nsteps: int
-    t_final: float
-    metrics: tuple[str, ...] = ()
-    dt_out: float | None = None     # time grid (suite/cell/timegrid.py); the specs stay as given
-    reference: str | None = None
-    section: int | None = None      # crossings of the problem's Poincaré section (suite/cell/sections.py)
-
-    def described(self) -> dict:
-        """What the tables' metadata records of the cell (and a redraw compares)."""
-        return {"cell": self.id, "problem": self.problem, "method": self.method,
-                "steps": self.steps, "t_end": self.t_end, "every": self.every,
-                "dt_out": self.dt_out, "reference": self.reference, "section": self.section}
+if TYPE_CHECKING:          # the schema (pydantic) is imported when a file is parsed, not by workers
+    from gnibench.suite.runs.experiment_schema import ExperimentFile, Group
 
 
 @dataclass(frozen=True)
@@ -130,8 +68,11 @@ def load_experiment(name_or_path: str | Path, scale: str = "paper") -> Experimen
     if path.suffix == ".toml" or "/" in arg or path.is_file():
         if not path.is_file():
             raise UserError(f"no experiment file {arg!r}")
+        if path.stat().st_size > 4 * MAX_CHARS:            # before reading it into memory
+            raise UserError(f"experiment file {arg!r} is {path.stat().st_size} bytes; allowed: "
+                            f"a TOML file of at most {MAX_CHARS} characters")
         try:
-            text, source = path.read_text(encoding="utf-8"), path.name
+            text, source, base = path.read_text(encoding="utf-8"), path.name, path.parent
         except UnicodeDecodeError as e:
             raise UserError(f"experiment file {arg!r} is not UTF-8 text (byte {e.start}); allowed: "
                             f"a TOML file in UTF-8") from None
@@ -141,43 +82,32 @@ def load_experiment(name_or_path: str | Path, scale: str = "paper") -> Experimen
         known = shipped()
         if arg not in known:
             raise unknown("experiment", arg, known)
-        text, source = known[arg], f"{arg}.toml"
-    return parse_experiment(text, source, scale)
+        text, source, base = known[arg], f"{arg}.toml", None
+    return parse_experiment(text, source, scale, base)
 
 
-def parse_experiment(text: str, source: str, scale: str = "paper") -> Experiment:
+def parse_experiment(text: str, source: str, scale: str = "paper",
+                     base: Path | None = None) -> Experiment:
     """Validate an experiment's TOML text at a scale and expand its cells (``source`` names it
-    in errors); a ``[figure]`` section is validated against the cells
+    in errors; ``base``: the directory its ``load`` paths are relative to, default the working
+    directory); a ``[figure]`` section is validated against the cells
     (:mod:`gnibench.suite.runs.figure_spec`)."""
+    from gnibench.suite.foundation.records import validate
+    from gnibench.suite.runs.experiment_schema import ExperimentFile
     from gnibench.suite.runs.scales import at_scale, check_scale, scales_stated
 
     check_scale(scale)
-    try:
-        doc = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as e:
-        raise UserError(f"{source}: not valid TOML: {e}") from None
-    _keys(doc, TOP_KEYS, source)
+    doc = load_toml(text, source)
+    validate(ExperimentFile, doc, source)        # every key, of every scale, before any applies
     stated = scales_stated(doc)
-    doc = at_scale(doc, scale, source)
-    name = _text(doc, "name", source, required=True)
-    if not _NAME.match(name):
-        raise UserError(f"{source}: bad name {name!r}; allowed: letters, digits and . _ - "
-                        "(it names the output directory)")
-    title = _text(doc, "title", source, required=True, one_line=True)
-    reference = _text(doc, "reference", source, required=True, one_line=True)
-    description = _text(doc, "description", source)
-    groups = doc.get("cells", [] if "figure" in doc else None)
-    if not isinstance(groups, list) or not all(isinstance(g, dict) for g in groups) or (
-            not groups and "figure" not in doc):
-        raise UserError(f"{source}: needs at least one [[cells]] group")
-    defaults = {k: doc[k] for k in ("t_end", "steps", "every", "dt_out", "section") if k in doc}
-    planned = sum(_planned_cells(g, f"{source}: cells[{gi}]") for gi, g in enumerate(groups))
+    top = validate(ExperimentFile, at_scale(doc, scale), source)
+    _load(top.load, base)                        # user definitions, before the cells are read
+    groups = top.cells
+    planned = sum(_planned_cells(g) for g in groups)
     check_count(planned, f"{source}", "GNIBENCH_MAX_CELLS", "cells")
-    defaults["metrics"] = _metrics(doc, source)
-    defaults["reference_solution"] = _reference_text(doc, source)
     cells: list[Cell] = []
     for gi, group in enumerate(groups):
-        cells.extend(_expand(group, gi, defaults, f"{source}: cells[{gi}]", len(cells)))
+        cells.extend(_expand(group, gi, top, f"{source}: cells[{gi}]", len(cells)))
     seen: dict[tuple, int] = {}
     for c in cells:
         key = (c.problem, c.method, c.steps, c.t_end, c.every, c.dt_out, c.reference, c.section)
@@ -186,163 +116,49 @@ def parse_experiment(text: str, source: str, scale: str = "paper") -> Experiment
                             f"{seen[key]}; allowed: each cell once")
         seen[key] = c.id
     figure = None
-    if "figure" in doc:
+    if top.figure is not None:
         from gnibench.suite.runs.figure_spec import parse_figure
 
-        figure = parse_figure(doc["figure"], cells, name=name, reference=reference,
+        figure = parse_figure(top.figure, cells, name=top.name, reference=top.reference,
                               scale=scale, where=f"{source}: figure")
-    return Experiment(name, title, reference, description, source, text, tuple(cells), scale,
-                      figure, stated)
+    return Experiment(top.name, top.title, top.reference, top.description, source, text,
+                      tuple(cells), scale, figure, stated)
 
 
-def _keys(table: dict, allowed: tuple[str, ...], where: str) -> None:
-    for key in table:
-        if key not in allowed:
-            raise UserError(f"{where}: {unknown('key', key, allowed)}")
-
-
-def _text(table: dict, key: str, where: str, required: bool = False,
-          one_line: bool = False) -> str:
-    if key not in table:
-        if required:
-            raise UserError(f"{where}: missing key {key!r} (a string)")
-        return ""
-    value = table[key]
-    if not isinstance(value, str) or (required and not value.strip()):
-        raise UserError(f"{where}: bad {key} = {value!r}; allowed: a non-empty string")
-    if one_line and any(not c.isprintable() for c in value):
-        raise UserError(f"{where}: bad {key} = {value!r}; allowed: one line of text (no line "
-                        f"breaks or control characters)")
-    return value
-
-
-def _spec_list(group: dict, key: str, where: str) -> list[str]:
-    value = group.get(key)
-    if not isinstance(value, list) or not value or not all(isinstance(s, str) for s in value):
-        raise UserError(f"{where}: bad or missing {key} = {value!r}; allowed: a non-empty list "
-                        "of spec strings")
-    return value
-
-
-def _horizon(group: dict, defaults: dict, where: str) -> tuple[int | None, float | None, int]:
+def _horizon(group: Group, top: ExperimentFile, where: str
+             ) -> tuple[int | None, float | None, int]:
     """steps or t_end (a group's horizon replaces the default one) and every."""
-    src = group if ("steps" in group or "t_end" in group) else defaults
-    if "steps" in src and "t_end" in src:
-        raise UserError(f"{where}: both steps and t_end given; allowed: exactly one of them")
-    if "steps" not in src and "t_end" not in src:
+    src = group if (group.steps is not None or group.t_end is not None) else top
+    if src.steps is None and src.t_end is None:
         raise UserError(f"{where}: no horizon; give t_end or steps (in the group or at the top)")
-    steps = t_end = None
-    if "steps" in src:
-        steps = _integer(src["steps"], "steps", where)
-    else:
-        t_end = src["t_end"]
-        if isinstance(t_end, bool) or not isinstance(t_end, (int, float)) or not (
-                math.isfinite(t_end) and t_end > 0):
-            raise UserError(f"{where}: bad t_end = {t_end!r}; allowed: a finite number > 0")
-        t_end = float(t_end)
-    every = _integer(group.get("every", defaults.get("every", 1)), "every", where)
-    return steps, t_end, every
+    every = group.every if group.every is not None else (top.every or 1)
+    return src.steps, src.t_end, every
 
 
-def _dt_out(group: dict, defaults: dict, where: str) -> float | None:
-    """The time grid of a group (its own dt_out replaces the top-level one)."""
-    from gnibench.suite.cell.timegrid import check_dt_out
-
-    try:
-        return check_dt_out(group.get("dt_out", defaults.get("dt_out")), "dt_out =")
-    except UserError as e:
-        raise UserError(f"{where}: {e}") from None
-
-
-def _section(group: dict, defaults: dict, where: str) -> int | None:
-    """The number of section crossings of a group (its own section replaces the top-level one)."""
-    value = group.get("section", defaults.get("section"))
-    return None if value is None else _integer(value, "section", where)
-
-
-def _integer(value, key: str, where: str) -> int:
-    if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= INT_LIMIT:
-        raise UserError(f"{where}: bad {key} = {value!r}; allowed: an integer from 1 to 2^62")
-    return value
-
-
-def _planned_cells(group, where: str) -> int:
+def _planned_cells(group: Group) -> int:
     """The number of cells a group expands to, counted before expanding it."""
-    if not isinstance(group, dict):
-        return 0
     from gnibench.suite.runs.scales import planned_points
 
-    n = planned_points(group.get("points"))
-    for key in ("problems", "methods"):
-        value = group.get(key)
-        n *= len(value) if isinstance(value, list) else 1
-    vary = group.get("vary", {})
-    if isinstance(vary, dict):
-        for value in vary.values():
-            for vals in (value.values() if isinstance(value, dict) else [value]):
-                n *= len(vals) if isinstance(vals, list) and vals else 1
+    n = planned_points(group.points) * len(group.problems) * len(group.methods)
+    for options in group.vary.values():
+        for values in options.values():
+            n *= len(values)
     return n
 
 
-def _value_text(value, where: str) -> str:
-    """Spec text of one vary value: floats round-trip, lists become a/b/c."""
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, int):
-        return str(value)
-    if isinstance(value, float) and math.isfinite(value):
-        return format_float(value)
-    if isinstance(value, str) and value and not re.search(r"[,:=+\s]", value):
-        return value
-    if isinstance(value, list) and value and all(
-            isinstance(v, (int, float)) and not isinstance(v, bool) for v in value):
-        return "/".join(_value_text(v, where) for v in value)
-    raise UserError(f"{where}: bad value {value!r}; allowed: a finite number, a boolean, a word, "
-                    "or a list of numbers")
+def _load(paths: list[str], base: Path | None) -> None:
+    """The experiment's user definitions (``load = ["defs.toml"]``, :mod:`gnibench.suite.cell.user`),
+    relative to the experiment file."""
+    from gnibench.suite.cell.user.loader import load
+
+    for p in paths:
+        load(Path(base or ".") / p)
 
 
-def _metrics(table: dict, where: str) -> tuple[str, ...] | None:
-    """The canonical texts of a ``metrics`` list (None when the key is absent)."""
-    from gnibench.suite.metrics.compute import parse_metrics
-
-    if "metrics" not in table:
-        return None
-    value = table["metrics"]
-    if not isinstance(value, list) or not all(isinstance(m, str) for m in value):
-        raise UserError(f"{where}: bad metrics = {value!r}; allowed: a list of metric spec "
-                        "strings, e.g. [\"eta\", \"growth:of=H\"] (gnibench list metrics)")
-    try:
-        return tuple(c.text() for c in parse_metrics(value))
-    except UserError as e:
-        raise UserError(f"{where}: metrics: {e}") from None
-
-
-def _reference_text(table: dict, where: str) -> str | None:
-    """The ``reference_solution`` string of a table (None when absent); each cell checks it."""
-    if "reference_solution" not in table:
-        return None
-    value = table["reference_solution"]
-    if not isinstance(value, str) or not value.strip() or any(not c.isprintable() for c in value):
-        raise UserError(f"{where}: bad reference_solution = {value!r}; allowed: exact | "
-                        "heyoka[:precision=double|long double|real128,tol=T] | rebound[:tol=T] | none")
-    return value
-
-
-def _reference(text: str | None, problem) -> str | None:
-    """The canonical text of a cell's reference solution (None: the problem's default)."""
-    from gnibench.suite.cell.reference import parse_reference
-
-    if text is None:
-        return None
-    spec = parse_reference(text, problem.record)
-    return "none" if spec is None else spec.text()
-
-
-def _check_metrics(metrics: tuple[str, ...], problems: list, where: str) -> None:
+def _check_metrics(choices, problems: list, where: str) -> None:
     """Each chosen metric must be able to apply to at least one problem of the group."""
-    from gnibench.suite.metrics.compute import not_applicable, parse_metrics
+    from gnibench.suite.metrics.compute import not_applicable
 
-    choices = parse_metrics(list(metrics))
     reasons = [not_applicable(choices, p) for p in problems]
     for c in choices:
         if all(c.text() in r for r in reasons):
@@ -350,71 +166,43 @@ def _check_metrics(metrics: tuple[str, ...], problems: list, where: str) -> None
             raise UserError(f"{where}: metric {c.text()} applies to no cell of the group: {why}")
 
 
-def _vary(group: dict, where: str) -> tuple[list[tuple[str, str, list[str]]], ...]:
+def _vary(group: Group) -> tuple[list[tuple[str, str, list[str]]], ...]:
     """(target, option, [value texts]) triples: target is 'problem', 'method' or a modifier id."""
-    vary = group.get("vary", {})
-    if not isinstance(vary, dict):
-        raise UserError(f"{where}: bad vary = {vary!r}; allowed: a table of option = [values]")
-    out = []
-    for key, value in vary.items():
-        if isinstance(value, dict):
-            items = [(key, opt, vals) for opt, vals in value.items()]
-        else:
-            items = [("method", key, value)]
-        for target, opt, vals in items:
-            here = f"{where}: vary.{'' if target == 'method' else target + '.'}{opt}"
-            if not isinstance(vals, list) or not vals:
-                raise UserError(f"{here}: bad value {vals!r}; allowed: a non-empty list of values")
-            out.append((target, opt, [_value_text(v, here) for v in vals]))
+    out = [(target, opt, vals) for target, options in group.vary.items()
+           for opt, vals in options.items()]
     problem_vary = [v for v in out if v[0] == "problem"]
     method_vary = [v for v in out if v[0] != "problem"]
     return problem_vary, method_vary
 
 
-def with_options(spec: str, target: str, options: dict[str, str]) -> str:
-    """The spec with the options of ``target`` ('problem', 'method' = the base, or a modifier id)
-    set to the given texts; unchanged when ``target`` is a modifier the spec does not have."""
-    parts = [spec] if target == "problem" else split_method(spec)
-    out = []
-    for i, part in enumerate(parts):
-        name, given = parse_item(part, "problem" if target == "problem" else "method")
-        if (i == 0 and target in ("problem", "method")) or (i > 0 and name == target):
-            given = {**given, **options}
-        out.append(name + (":" + ",".join(f"{k}={v}" for k, v in given.items()) if given else ""))
-    return "+".join(out)
+def _expand(group: Group, gi: int, defaults: ExperimentFile, where: str, first_id: int
+            ) -> list[Cell]:
+    from gnibench.suite.metrics.cells import make_cell
+    from gnibench.suite.metrics.compute import parse_metrics
 
-
-def _expand(group: dict, gi: int, defaults: dict, where: str, first_id: int) -> list[Cell]:
-    from gnibench.suite.cell.driver import check_budgets
-    from gnibench.suite.cell.grid import grid, grid_step
-    from gnibench.suite.cell.spec import prepare
-    from gnibench.suite.cell.timegrid import effective_dt_out, engine_method
-    from gnibench.suite.metrics.compute import parse_metrics, period_grid
-
-    _keys(group, GROUP_KEYS, where)
-    label = _text(group, "label", where, one_line=True)
-    problems = _spec_list(group, "problems", where)
-    methods = _spec_list(group, "methods", where)
+    label, problems, methods = group.label, group.problems, group.methods
     steps, t_end, every = _horizon(group, defaults, where)
-    metrics = _metrics(group, where)
-    metrics = (defaults.get("metrics") or ()) if metrics is None else metrics
-    dt_out = _dt_out(group, defaults, where)
-    section = _section(group, defaults, where)
+    metrics = defaults.metrics or () if group.metrics is None else group.metrics
+    dt_out = group.dt_out if group.dt_out is not None else defaults.dt_out
+    section = group.section if group.section is not None else defaults.section
     if section is not None and dt_out is not None:
         raise UserError(f"{where}: section and dt_out both given; allowed: one of them (a section "
                         "cell writes its crossings, not samples)")
-    reference = _reference_text(group, where)
-    reference = defaults.get("reference_solution") if reference is None else reference
-    problem_vary, method_vary = _vary(group, where)
+    reference = (defaults.reference_solution if group.reference_solution is None
+                 else group.reference_solution)
+    problem_vary, method_vary = _vary(group)
     metric_choices = parse_metrics(list(metrics))
     points = [{}]
-    if "points" in group:
+    if group.points is not None:
         from gnibench.suite.runs.scales import point_options
 
         points = [{k: format_float(v) for k, v in p.items()}
-                  for p in point_options(group["points"], where)]
+                  for p in point_options(group.points, where)]
+    try:
+        modifiers = {mod.id for m in methods for mod in structure(m).modifiers}
+    except UserError as e:
+        raise UserError(f"{where}: {e}") from None
     for target, opt, _ in method_vary:
-        modifiers = {part.partition(":")[0].strip() for m in methods for part in split_method(m)[1:]}
         if target != "method" and target not in modifiers:
             raise UserError(f"{where}: vary.{target}.{opt}: no method of the group has the "
                             f"modifier {target!r}")
@@ -429,29 +217,14 @@ def _expand(group: dict, gi: int, defaults: dict, where: str, first_id: int) -> 
                 pspec = _apply(pspec, problem_vary, pvals)
                 mspec = _apply(mgiven, method_vary, mvals)
                 here = f"{where}: {pspec} {mspec}"
-                problem, method = prepare(pspec, mspec)
-                parsed_problems.append(problem)
-                external = getattr(method.base.record, "run", None) is not None
-                cell_dt_out = dt_out if section is not None else period_grid(
-                    metric_choices, problem, method, every, dt_out)   # eta: samples at t = nT
-                if cell_dt_out is not None and external:  # an engine's dt_out is its own grid
-                    method = engine_method(method, cell_dt_out, problem)
-                elif cell_dt_out is not None:
-                    effective_dt_out(method, cell_dt_out)  # refuses a conflicting method option
-                h = grid_step(method)
-                nsteps, h_last = grid(h, steps, t_end)
-                check_budgets(problem, method, steps, t_end, every, section, cell_dt_out)
-                if section is not None and not problem.record.sections:
-                    raise UserError(f"problem {problem.record.id!r} has no Poincaré section; "
-                                    "allowed: a group without section")
-                ref = None if section is not None else _reference(reference, problem)
+                spec = make_cell(pspec, mspec, steps=steps, t_end=t_end, every=every,
+                                 dt_out=dt_out, section=section, reference=reference,
+                                 metrics=metric_choices)
             except UserError as e:
                 raise UserError(f"{here}: {e}") from None
-            cells.append(Cell(first_id + len(cells), gi, label, pspec, mspec, problem.text(),
-                              method.text(), h, steps, t_end, every, nsteps,
-                              (nsteps - 1) * h + h_last, metrics, dt_out=cell_dt_out, reference=ref,
-                              section=section))
-    _check_metrics(metrics, parsed_problems, where)
+            parsed_problems.append(spec.problem)
+            cells.append(Cell(first_id + len(cells), gi, label, spec))
+    _check_metrics(metric_choices, parsed_problems, where)
     return cells
 
 

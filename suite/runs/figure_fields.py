@@ -2,13 +2,15 @@
 
 Level curves of a first integral ([HLW] Fig 1.2's exact solution curves, Fig 3.1's Hénon–Heiles
 potential U = H at p = 0, [HLW] (3.2); [B] Fig 15's level sets of H_R) and the arrows of a vector
-field ([HLW] Fig 1.1, first picture). :func:`parse_field` validates one
-``[[figure.panels.fields]]`` table (schema in :mod:`gnibench.suite.runs.figure_spec`);
+field ([HLW] Fig 1.1, first picture). :func:`parse_field` checks one
+``[[figure.panels.fields]]`` record (schema in :mod:`gnibench.suite.runs.figure_schema`) against
+its problem;
 :func:`field_table` evaluates all the fields of a normalized figure into one long table,
 ``fields.parquet`` beside ``samples.parquet``, so the drawing reads tables only.
 
 A ``fixed`` state is a number, or an expression in the two axis states (numbers, the axis names,
-+ − * / **, parentheses), evaluated on the grid: a state on a chart of the plane rather than
++ − * / **, parentheses; :mod:`gnibench.suite.foundation.expressions`, bounded: ``"1/0"``,
+``"1e400"`` or a 400-digit literal are refused when the file is read), evaluated on the grid: a state on a chart of the plane rather than
 constant, e.g. [B] Fig 15(b)'s level sets of H_R at I = K = 0.1 drawn through (6.2) at φ = π/2,
 ``x = "p2"`` (r), ``y = "q2"`` (−P), ``fixed = { p1 = 0, q1 = "0.1 / p2" }`` (q1 = I/r).
 
@@ -20,156 +22,90 @@ boundary of the domain.
 """
 from __future__ import annotations
 
-import ast
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
+from gnibench.suite.foundation import expressions
 from gnibench.suite.foundation.errors import UserError, unknown
+from gnibench.suite.foundation.records import short
 
-FIELD_KEYS = ("problem", "function", "kind", "x", "y", "fixed", "xrange", "yrange", "n", "levels",
-              "through", "label", "color")
-FIELD_KINDS = ("contour", "quiver")
-MAX_GRID = 1000
+if TYPE_CHECKING:
+    from gnibench.suite.runs.figure_schema import FieldLayer
 
 
-def parse_field(field, where: str) -> dict:
-    """Validate a field table; the normalized field (levels resolved, fixed values complete)."""
+def parse_field(field: FieldLayer | dict, where: str) -> dict:
+    """Check a field record (or table) against its problem; the normalized field (levels resolved,
+    fixed values complete: numbers, or checked expressions kept as text)."""
     from gnibench.suite.cell.spec import parse_problem
+    from gnibench.suite.foundation.records import validate
     from gnibench.suite.metrics.base import integral_names
+    from gnibench.suite.runs.figure_schema import FieldLayer
 
-    if not isinstance(field, dict):
-        raise UserError(f"{where}: bad value; allowed: a table")
-    for key in field:
-        if key not in FIELD_KEYS:
-            raise UserError(f"{where}: {unknown('key', key, FIELD_KEYS)}")
-    spec = field.get("problem")
-    if not isinstance(spec, str):
-        raise UserError(f"{where}: missing problem (a PROBLEM spec string)")
+    if isinstance(field, dict):                   # a table not validated yet
+        field = validate(FieldLayer, field, where)
     try:
-        problem = parse_problem(spec)
+        problem = parse_problem(field.problem)
     except UserError as e:
         raise UserError(f"{where}: {e}") from None
     rec = problem.record
-    kind = field.get("kind", "contour")
-    if kind not in FIELD_KINDS:
-        raise UserError(f"{where}: {unknown('kind', str(kind), FIELD_KINDS)}")
+    kind = field.kind
     integrals = integral_names(problem)
-    function = field.get("function", "field" if kind == "quiver" else None)
+    function = field.function if field.function is not None else (
+        "field" if kind == "quiver" else None)
     allowed = ("field",) if kind == "quiver" else tuple(integrals) + (
         ("domain",) if rec.boundary is not None else ())
     if function not in allowed:
         raise UserError(f"{where}: {unknown('function', str(function), allowed)}")
-    x, y = field.get("x"), field.get("y")
+    x, y = field.x, field.y
     for axis, name in (("x", x), ("y", y)):
         if name not in rec.state:
             raise UserError(f"{where}: {axis}: {unknown('state', str(name), rec.state)}")
     if x == y:
         raise UserError(f"{where}: x and y are the same state {x!r}")
     y0 = dict(zip(rec.state, rec.y0(problem.values)))
-    fixed = field.get("fixed", {})
-    if not isinstance(fixed, dict):
-        raise UserError(f"{where}: bad fixed = {fixed!r}; allowed: a table state = number")
-    for name, value in fixed.items():
+    for name, value in field.fixed.items():
         if name not in rec.state or name in (x, y):
             others = [s for s in rec.state if s not in (x, y)]
             raise UserError(f"{where}: fixed: {unknown('state', name, others)}")
-        y0[name] = (_expression(value, (x, y), f"{where}: fixed.{name}") if isinstance(value, str)
-                    else _number(value, f"{where}: fixed.{name}"))
+        here = f"{where}: fixed.{name}"
+        if isinstance(value, str):
+            expressions.parse(value, here, names=(x, y), functions=(), logic=False)
+        elif isinstance(value, bool) or not isinstance(value, (int, float)) or not (
+                abs(value) <= 2 ** 53 if isinstance(value, int) else math.isfinite(value)):
+            raise UserError(f"{here}: bad value {short(value)}; allowed: a finite number, or an "
+                            f"expression of {x} and {y} (a string)")
+        y0[name] = value if isinstance(value, str) else float(value)
     out = {"problem": problem.text(), "function": function, "kind": kind, "x": x, "y": y,
            "fixed": {s: v for s, v in y0.items() if s not in (x, y)},
-           "xrange": _range(field, "xrange", where), "yrange": _range(field, "yrange", where),
-           "label": _line(field.get("label", ""), f"{where}: label"),
-           "color": _line(field.get("color", ""), f"{where}: color")}
-    n = field.get("n", 200 if kind == "contour" else 21)
-    if isinstance(n, bool) or not isinstance(n, int) or not 2 <= n <= MAX_GRID:
-        raise UserError(f"{where}: bad n = {n!r}; allowed: an integer from 2 to {MAX_GRID}")
-    out["n"] = n
+           "xrange": list(field.xrange), "yrange": list(field.yrange),
+           "label": field.label, "color": field.color,
+           "n": field.n if field.n is not None else (200 if kind == "contour" else 21)}
     out["levels"] = _levels(field, out, kind, where)
     return out
-
-
-def _number(value, where: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise UserError(f"{where}: bad value {value!r}; allowed: a finite number")
-    return float(value)
-
-
-def _line(value, where: str) -> str:
-    if not isinstance(value, str) or not value.isprintable():
-        raise UserError(f"{where}: bad value {value!r}; allowed: one line of text")
-    return value
-
-
-_EXPR_NODES = (ast.Expression, ast.BinOp, ast.UnaryOp, ast.Constant, ast.Name, ast.Load,
-               ast.Add, ast.Sub, ast.Mult, ast.Div, ast.Pow, ast.USub, ast.UAdd)
-
-
-def _expression(text: str, axes: tuple, where: str) -> str:
-    """A fixed state given as an expression in the axis states (checked; kept as text)."""
-    try:
-        tree = ast.parse(text, mode="eval")
-    except SyntaxError:
-        tree = None
-    ok = tree is not None and all(
-        isinstance(n, _EXPR_NODES)
-        and (not isinstance(n, ast.Constant) or type(n.value) in (int, float))
-        and (not isinstance(n, ast.Name) or n.id in axes) for n in ast.walk(tree))
-    if not ok:
-        raise UserError(f"{where}: bad expression {text!r}; allowed: numbers, the axis states "
-                        f"{axes[0]} and {axes[1]}, + - * / ** and parentheses")
-    return text
 
 
 def _grid_value(value, names: dict) -> np.ndarray | float:
     """A fixed state on the grid: its number, or its expression at the grid's axis values."""
     if not isinstance(value, str):
         return value
-    ops = {ast.Add: np.add, ast.Sub: np.subtract, ast.Mult: np.multiply, ast.Div: np.divide,
-           ast.Pow: np.power}
-
-    def ev(node):
-        if isinstance(node, ast.Constant):
-            return float(node.value)
-        if isinstance(node, ast.Name):
-            return names[node.id]
-        if isinstance(node, ast.UnaryOp):
-            return -ev(node.operand) if isinstance(node.op, ast.USub) else ev(node.operand)
-        return ops[type(node.op)](ev(node.left), ev(node.right))
-
-    with np.errstate(all="ignore"):
-        return ev(ast.parse(value, mode="eval").body)
+    return expressions.evaluate_array(expressions.parse(value, "fixed", names=tuple(names),
+                                                        functions=(), logic=False), names)
 
 
-def _range(field: dict, key: str, where: str) -> list[float]:
-    value = field.get(key)
-    if not isinstance(value, list) or len(value) != 2:
-        raise UserError(f"{where}: bad or missing {key} = {value!r}; allowed: [a, b] with a < b")
-    a, b = (_number(v, f"{where}: {key}") for v in value)
-    if not a < b:
-        raise UserError(f"{where}: bad {key} = {value!r}; allowed: [a, b] with a < b")
-    return [a, b]
-
-
-def _levels(field: dict, out: dict, kind: str, where: str) -> list[float] | None:
+def _levels(field: FieldLayer, out: dict, kind: str, where: str) -> list[float] | None:
     if kind == "quiver":
-        if "levels" in field or "through" in field:
+        if field.levels is not None or field.through is not None:
             raise UserError(f"{where}: levels and through apply to contours only")
         return None
-    if out["function"] == "domain" and "levels" not in field and "through" not in field:
+    if out["function"] == "domain" and field.levels is None and field.through is None:
         return [0.0]                                   # the boundary of the domain
-    if ("levels" in field) == ("through" in field):
+    if (field.levels is None) == (field.through is None):
         raise UserError(f"{where}: give levels = [numbers] or through = [[x, y], ...]")
-    if "levels" in field:
-        levels = field["levels"]
-        if not isinstance(levels, list) or not levels:
-            raise UserError(f"{where}: bad levels; allowed: a non-empty list of numbers")
-        values = [_number(v, f"{where}: levels") for v in levels]
+    if field.levels is not None:
+        values = list(field.levels)
     else:
-        points = field["through"]
-        if not isinstance(points, list) or not points or not all(
-                isinstance(p, list) and len(p) == 2 for p in points):
-            raise UserError(f"{where}: bad through; allowed: a list of [x, y] points")
-        pts = np.array([[_number(v, f"{where}: through") for v in p] for p in points])
+        pts = np.array(field.through, dtype=float)
         values = [float(v) for v in _evaluate_python(out, pts[:, 0], pts[:, 1])]
         if not all(math.isfinite(v) for v in values):
             raise UserError(f"{where}: through: {out['function']} is not finite at a point")
