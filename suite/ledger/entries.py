@@ -159,8 +159,8 @@ class Claim(Record):
         "", "horizon: a section run that reached its horizon is complete (the count is a cap)")
     needed: Text = key("", "what would have been needed to reproduce the claim")
     side: Annotated[dict[Name, Annotated[Value, AfterValidator(_plain)]],
-                    Field(max_length=64)] = key({}, "a not-checkable entry's side result: "
-                                                    "numbers read as values are",
+                    Field(max_length=64)] = key({}, "a not-checkable entry's side result: our "
+                                                    "numbers, read as values are, shown beside it",
                                                 "a table name = {cells, column | sample, at, "
                                                 "reduce}")
     _source: str = PrivateAttr("")
