@@ -175,7 +175,7 @@ def euler_observer_improvement(cells, samples) -> dict:
     if len(plain) != 1 or len(observed) != 1:
         raise LookupError("select one plain Euler cell and one Euler + observer cell")
     (p,), (o,) = plain, observed
-    pid = o.problem.partition(":")[0]
+    pid = item_id(o.problem)
     spec = _ENERGIES[pid]
     names = [k for k in spec if k != "states"]
     C = np.array([spec[n] for n in names])
