@@ -13,6 +13,7 @@ from gnibench.methods import (
                      partitioned,
                      projection,
 )
+from gnibench.suite.foundation.registries import register
 
 METHODS = {m.id: m for m in (
     explicit_rk.euler,
@@ -43,10 +44,23 @@ ALIASES = {alias: m.id for m in METHODS.values() for alias in m.aliases}
 
 # The methods that run as compiled gnibench kernels; the external engines (methods/external.py)
 # have their own tests (tests/test_reference.py).
-COMPILED = {k: m for k, m in METHODS.items() if getattr(m, "run", None) is None}
+COMPILED = {k: m for k, m in METHODS.items() if m.kind == "compiled"}
 
 MODIFIERS = {m.id: m for m in (
     modifiers.observer,
     modifiers.penalty,
     projection.projection,
 )}
+
+
+def lookup_method(id: str):
+    """The method record ``id`` (or an alias of it), or None."""
+    return METHODS.get(ALIASES.get(id, id))
+
+
+def lookup_modifier(id: str):
+    return MODIFIERS.get(id)
+
+
+register("method", lookup_method)
+register("modifier", lookup_modifier)

@@ -13,6 +13,7 @@ from typing import Any
 
 from gnibench.suite.foundation.errors import UserError
 from gnibench.suite.foundation.params import Param
+from gnibench.suite.foundation.registries import Registered
 
 H_PARAM = Param("h", 0.01, "step size (default: 0.01 time scales of the problem)", low=0.0,
                 low_open=True, scaled=True)
@@ -38,15 +39,25 @@ def adaptive_params(tol: float) -> tuple[Param, ...]:
     )
 
 
+#: how a method runs (``Method.kind``): a compiled gnibench kernel, an external engine
+#: (heyoka, rebound: ``ExternalMethod.run``), or Python code of the user's (user definitions)
+KINDS = ("compiled", "external", "python")
+
+
 @dataclass(frozen=True)
-class Method:
+class Method(Registered):
     """A base integrator.
 
     ``needs`` lists the problem structure the method requires: ``partition`` (two blocks u, v as in
     [HLW] (1.8)). ``symplectic`` means symplectic for Hamiltonian problems in canonical partition.
     ``field_modifiers_refused``, when set, says why the method cannot integrate a field changed by a
     modifier (observer, penalty); the spec parser then refuses such a modifier at validation.
+    ``kind`` says how it runs (:data:`KINDS`); ``origin``, where a user definition comes from
+    (None for the shipped methods; :mod:`gnibench.suite.foundation.registries`), and
+    ``definition`` its text.
     """
+
+    registry = "method"
 
     id: str
     family: str
@@ -63,6 +74,13 @@ class Method:
     field_modifiers_refused: str = ""  # why the method cannot take +observer/+penalty ("" if it can)
     data: Any = None
     aliases: tuple[str, ...] = field(default=())
+    kind: str = "compiled"
+    origin: Any = None
+    definition: str = ""             # a user definition's text (part of a stored cell's key)
+
+    def __post_init__(self):
+        if self.kind not in KINDS:
+            raise ValueError(f"method {self.id}: bad kind {self.kind!r}; allowed: {KINDS}")
 
     def check_structure(self, problem, has_modifiers: bool) -> None:
         """Refuse, with a clear error, a problem that lacks the structure this method needs."""
@@ -73,8 +91,8 @@ class Method:
 
     def describe(self) -> dict:
         return {
-            "id": self.id, "family": self.family, "order": self.order, "reference": self.reference,
-            "doc": self.doc,
+            "id": self.id, "family": self.family, "kind": self.kind, "order": self.order,
+            "reference": self.reference, "doc": self.doc,
             "properties": {"implicit": self.implicit,
                            "explicit": (f"when {self.explicit_when}" if self.explicit_when
                                         else not self.implicit),
@@ -85,13 +103,15 @@ class Method:
 
 
 @dataclass(frozen=True)
-class Modifier:
+class Modifier(Registered):
     """A vector-field modifier (observer, penalty): adds a term to F that any method then integrates.
 
     ``resolve(values, problem)`` fills in defaults that depend on the problem (the observed integrals)
     and checks them; ``generate(ctx, index, offset)`` returns the source of ``<name>_term(y, par)`` and
     ``<name>_jac(y, par, J)``; ``runtime(values, h0)`` the numbers it reads from ``par``.
     """
+
+    registry = "modifier"
 
     id: str
     reference: str

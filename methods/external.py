@@ -52,6 +52,7 @@ class ExternalMethod(Method):
     """
 
     run: Callable | None = None
+    kind: str = "external"
     grid_param: str = "h"
     adaptive: bool = False
     engine: str = ""

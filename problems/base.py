@@ -15,6 +15,7 @@ from typing import Any
 
 from gnibench.suite.foundation.errors import UserError
 from gnibench.suite.foundation.params import Bound, Param
+from gnibench.suite.foundation.registries import Registered
 
 
 @dataclass(frozen=True)
@@ -85,7 +86,7 @@ class Transform:
 
 
 @dataclass(frozen=True)
-class Problem:
+class Problem(Registered):
     """A self-describing problem record.
 
     Parameters
@@ -122,7 +123,15 @@ class Problem:
         Identification map applied after every accepted step, e.g. the homography that maps a
         geodesic back into the fundamental octagon ([B] (8.3)-(8.4)). A numba-compilable template
         function ``post_step(y, par) -> y`` (free names as in methods/kernels/free.py).
+    origin, definition:
+        Where a user definition comes from (None for the shipped problems): a picklable object
+        whose ``load()`` defines it in a process that lacks it
+        (:mod:`gnibench.suite.foundation.registries`); and the definition's text, part of the key
+        of the generated code and of a stored cell ("" for the shipped problems, whose source
+        files are hashed instead).
     """
+
+    registry = "problem"
 
     id: str
     title: str
@@ -142,6 +151,8 @@ class Problem:
     transform: Transform | None = None
     time_scale: Callable[[dict], float] | None = None
     model_params: tuple[str, ...] = field(default=())
+    origin: Any = None
+    definition: str = ""
 
     def __post_init__(self):
         if self.partition is None and self.canonical is not None:

@@ -30,6 +30,7 @@ def _source_hash(problem) -> str:
     for obj in (mod, sys.modules[__name__], sys.modules["gnibench.problems.base"]):
         h.update(inspect.getsource(obj).encode())
     h.update(problem.id.encode())
+    h.update(problem.definition.encode())        # a user definition's text ("" if shipped)
     return h.hexdigest()[:16]
 
 

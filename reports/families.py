@@ -53,10 +53,10 @@ def _same(text: str, default: str) -> bool:
 
 def family_of(method: str) -> Family:
     """The family of a canonical method spec (see the module docstring)."""
-    from gnibench.suite.cell.spec import parse_item, split_method
+    from gnibench.suite.cell.spec import Item, Structure, structure
 
-    parts = split_method(method)
-    base, given = parse_item(parts[0], "method")
+    spec = structure(method)
+    base, given = spec.id, spec.base.given
     defaults = _default_texts(base)
     adaptive = given.get("adaptive", defaults.get("adaptive", "false")).lower() == "true" or \
         base in ("heyoka-taylor", "rebound-ias15")
@@ -65,9 +65,7 @@ def family_of(method: str) -> Family:
         sweep = ""
     keep = {k: v for k, v in given.items()
             if k not in SWEEP and k not in QUIET and not (k in defaults and _same(v, defaults[k]))}
-    label = base + (":" + ",".join(f"{k}={v}" for k, v in keep.items()) if keep else "")
-    if len(parts) > 1:
-        label += "+" + "+".join(parts[1:])
+    label = Structure(Item(base, tuple(keep.items())), spec.modifiers).text()
     try:
         value = float(given[sweep]) if sweep else float("nan")
     except ValueError:
@@ -75,12 +73,24 @@ def family_of(method: str) -> Family:
     return Family(label, sweep, value, adaptive, base)
 
 
+def kind_of(base: str) -> str:
+    """How a shipped method runs (``compiled``, ``external``), for tables written before the
+    column ``method_kind``; a method this process does not know is ``compiled``."""
+    from gnibench.methods import lookup_method
+
+    record = lookup_method(base)
+    return record.kind if record is not None else "compiled"
+
+
 def add_families(cells):
-    """The cells table with columns ``family``, ``sweep``, ``sweep_value``, ``adaptive``."""
+    """The cells table with columns ``family``, ``sweep``, ``sweep_value``, ``adaptive`` and
+    ``method_kind`` (how the method runs: the table's column, else the registry's)."""
     fams = [family_of(m) for m in cells["method"]]
     out = cells.copy()
     out["family"] = [f.label for f in fams]
     out["sweep"] = [f.sweep for f in fams]
     out["sweep_value"] = [f.value for f in fams]
     out["adaptive"] = [f.adaptive for f in fams]
+    if "method_kind" not in out:
+        out["method_kind"] = [kind_of(f.base) for f in fams]
     return out

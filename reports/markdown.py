@@ -109,7 +109,8 @@ def render_summary(meta: dict, cells, timings) -> str:
         header += ["run ms", "compile s"]
         rows = []
         for d in records:
-            row = [d["cell"], code(d["method"]), escape(d["status"]), _num(d["t_final"], ".4g"),
+            kind = " (runs in Python)" if d.get("method_kind") == "python" else ""
+            row = [d["cell"], code(d["method"]) + kind, escape(d["status"]), _num(d["t_final"], ".4g"),
                    _num(d["steps"]), _count(d["nfev"])]
             row += [_num(d[c]) for c in errs]
             if has_exact:

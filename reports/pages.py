@@ -16,10 +16,10 @@ from pathlib import Path
 
 from gnibench.reports import league, plots, workprecision
 
-FIXED = {"cell", "group", "label", "problem", "method", "h", "t_end", "steps_planned", "every",
-         "status", "reason", "steps", "t_final", "nfev", "njev", "samples", "integrals",
-         "reference", "metrics", "metric_notes", "final_global_error", "max_global_error",
-         "family", "sweep", "sweep_value", "adaptive"}
+FIXED = {"cell", "group", "label", "problem", "method", "method_kind", "h", "t_end",
+         "steps_planned", "every", "status", "reason", "steps", "t_final", "nfev", "njev",
+         "samples", "integrals", "reference", "metrics", "metric_notes", "final_global_error",
+         "max_global_error", "family", "sweep", "sweep_value", "adaptive"}
 _NOTE = re.compile(r"^\s*\((choice|reading)\)\s*", re.IGNORECASE)
 
 
@@ -91,7 +91,8 @@ def cells_table(part, samples, wall: dict[int, float], compile_s: dict[int, floa
     for r in part.to_dict("records"):
         cid = int(r["cell"])
         s = by_cell.get(cid) if samples is not None else None
-        row = [str(cid), str(r["method"]), str(r["status"]), _horizon(r), num(r["every"]),
+        kind = " (runs in Python)" if r.get("method_kind") == "python" else ""
+        row = [str(cid), str(r["method"]) + kind, str(r["status"]), _horizon(r), num(r["every"]),
                num(r["t_final"], ".6g"), num(r["steps"]), num(r["nfev"]),
                num(wall.get(cid, math.nan) * 1e3), num(compile_s.get(cid), ".2f")]
         row += [num(r[f"max_abs_err_{i}"]) for i in errs]
@@ -203,7 +204,9 @@ def problem_sections(problems):
     import pandas as pd
 
     problems = pd.Series(problems).astype(str)
-    ids = problems.str.partition(":")[0]
+    from gnibench.suite.cell.spec import item_id
+
+    ids = problems.map(lambda text: item_id(text, "problem"))
     many = {i for i, n in problems.groupby(ids).nunique().items() if n > MAX_SPECS_PER_PROBLEM}
     return pd.Series(problems.where(~ids.isin(many), ids + " (" + problems.groupby(ids)
                                     .transform("nunique").astype(str) + " initial values)"),

@@ -163,7 +163,8 @@ def time_figures(problem: str, cells, samples, out_dir: Path, prefix: str, slug:
     shade = shades(cells)
     ids, note = pick_cells(cells[cells["cell"].isin(traj["cell"].unique())])
     style = styles(list(dict.fromkeys(cells["family"])),
-                   dict(zip(cells["family"], cells["adaptive"])))
+                   dict(zip(cells["family"], cells["adaptive"])),
+                   dict(zip(cells["family"], cells["method_kind"])))
     integrals = [i for i in dict.fromkeys("/".join(cells["integrals"].fillna("")).split("/")) if i]
     integrals = [i for i in integrals if f"err_{i}" in traj and traj[f"err_{i}"].notna().any()]
     if ids and integrals:
@@ -198,7 +199,7 @@ def time_figures(problem: str, cells, samples, out_dir: Path, prefix: str, slug:
     if "crossing" in samples and samples["crossing"].notna().any():
         plot = section_plot(problem, cells, samples[samples["crossing"].notna()], style)
         if plot is not None:
-            coords = section_coords(problem)
+            coords = section_coords(str(cells["problem"].iloc[0]))
             add(f"{prefix}-sections.png", plot, f"{problem}: Poincaré section",
                 f"Section crossings in the section's coordinates ({coords[0]}, {coords[1]}), "
                 "one panel per section cell.")
@@ -206,10 +207,11 @@ def time_figures(problem: str, cells, samples, out_dir: Path, prefix: str, slug:
 
 
 def section_coords(problem: str) -> tuple[str, ...]:
-    """The recorded coordinates of a problem's (first) Poincaré section."""
+    """The recorded coordinates of a problem's (first) Poincaré section (``problem``: a spec)."""
     from gnibench.problems import REGISTRY
+    from gnibench.suite.cell.spec import item_id
 
-    record = REGISTRY.get(problem.split(" ")[0].partition(":")[0])
+    record = REGISTRY.get(item_id(problem, "problem"))
     if record is None or not record.sections:
         return ()
     return tuple(record.sections[0].coords)
@@ -217,7 +219,7 @@ def section_coords(problem: str) -> tuple[str, ...]:
 
 def section_plot(problem: str, cells, points, style) -> Plot | None:
     """One panel per section cell: its crossings in the section's coordinates."""
-    coords = section_coords(problem)
+    coords = section_coords(str(cells["problem"].iloc[0]))
     if len(coords) < 2:
         return None
     ids = [int(c) for c in cells["cell"] if c in set(points["cell"])][:MAX_CURVES]

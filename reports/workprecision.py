@@ -50,7 +50,8 @@ def wp_figures(problem: str, cells, wall_by_cell: dict[int, float], out_dir: Pat
     """The work-precision figures of one problem's cells (with family columns); their drawing is
     appended to ``jobs``."""
     fams = list(dict.fromkeys(cells["family"]))
-    style = styles(fams, dict(zip(cells["family"], cells["adaptive"])))
+    style = styles(fams, dict(zip(cells["family"], cells["adaptive"])),
+                   dict(zip(cells["family"], cells["method_kind"])))
     ok = cells[cells["status"] == "ok"].copy()
     ok["wall_ms"] = [wall_by_cell.get(int(c), math.nan) * 1e3 for c in ok["cell"]]
     rows = measures(cells)

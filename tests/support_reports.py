@@ -61,14 +61,15 @@ def make_results(root: Path, monkeypatch) -> Path:
     import gnibench.suite.cell.solve
     from gnibench.suite.runs.runner import run_experiment
 
-    real = gnibench.suite.cell.solve.solve
+    real = gnibench.suite.cell.solve.solve_cell
 
-    def solve(problem, method, **kw):
+    def solve_cell(cell, **kw):
+        method = cell.method_text
         if "stormer-verlet:h=0.025" in method:
             raise RuntimeError(HOSTILE_REASON)
-        return real(problem, method, **kw)
+        return real(cell, **kw)
 
-    monkeypatch.setattr(gnibench.suite.cell.solve, "solve", solve)
+    monkeypatch.setattr(gnibench.suite.cell.solve, "solve_cell", solve_cell)
     path = root / "hostile.toml"
     path.write_text(EXPERIMENT, encoding="utf-8")
     out = run_experiment(path, root / "results", jobs=1, log=open("/dev/null", "w"))  # noqa: SIM115

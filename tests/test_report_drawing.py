@@ -7,9 +7,9 @@ import json
 import os
 import re
 
-import gnibench.reports.drawing as drawing
 import numpy as np
 import pytest
+from gnibench.reports import drawing
 from gnibench.reports.drawing import MANIFEST, Job, draw, likely_to_draw
 from gnibench.reports.render import Panel, Plot, Series, plain_label, plot_key
 from gnibench.reports.site import build_site

@@ -41,14 +41,15 @@ def tiny(tmp_path):
 @pytest.fixture
 def failing_cell(monkeypatch):
     """Make the cell with h = 0.025 raise, as an unexpected bug would."""
-    real = gnibench.suite.cell.solve.solve
+    real = gnibench.suite.cell.solve.solve_cell
 
-    def solve(problem, method, **kw):
+    def solve_cell(cell, **kw):
+        method = cell.method_text
         if "h=0.025" in method:
             raise RuntimeError("boom")
-        return real(problem, method, **kw)
+        return real(cell, **kw)
 
-    monkeypatch.setattr(gnibench.suite.cell.solve, "solve", solve)
+    monkeypatch.setattr(gnibench.suite.cell.solve, "solve_cell", solve_cell)
 
 
 @pytest.mark.parametrize("name", sorted(shipped()))
@@ -119,14 +120,15 @@ def test_two_runs_are_bit_identical(tiny, tmp_path):
 
 
 def test_interrupt_keeps_finished_cells(tiny, tmp_path, monkeypatch):
-    real = gnibench.suite.cell.solve.solve
+    real = gnibench.suite.cell.solve.solve_cell
 
-    def solve(problem, method, **kw):
+    def solve_cell(cell, **kw):
+        method = cell.method_text
         if "h=1e+200" in method or "h=1e200" in method:
             raise KeyboardInterrupt
-        return real(problem, method, **kw)
+        return real(cell, **kw)
 
-    monkeypatch.setattr(gnibench.suite.cell.solve, "solve", solve)
+    monkeypatch.setattr(gnibench.suite.cell.solve, "solve_cell", solve_cell)
     out = tmp_path / "out"
     assert main(["run", str(tiny), "-o", str(out), "-j", "1"]) == 130
     cells = pd.read_parquet(out / "cells.parquet")

@@ -70,13 +70,9 @@ RC = {
 
 def method_key(method_spec: str) -> str:
     """``rk4:h=0.01+observer:theta=1`` -> ``rk4+observer`` (base id and modifier ids)."""
-    parts = []
-    for k, part in enumerate(method_spec.split("+")):
-        name = part.partition(":")[0].strip()
-        if k > 0 and (not name or not name[0].isalpha()):      # '1e+6' inside an option
-            continue
-        parts.append(name)
-    return "+".join(parts)
+    from gnibench.suite.cell.spec import structure
+
+    return structure(method_spec).key
 
 
 def color_of(key: str) -> str:

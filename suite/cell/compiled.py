@@ -168,7 +168,7 @@ def kernel_key(problem: Bound, method) -> str:
 
     from gnibench.suite.cell.codegen import module_source
 
-    if getattr(method.base.record, "run", None) is not None:
+    if method.kind != "compiled":
         return f"engine:{method.base.record.engine}:{problem.id}"
     target = problem.record.transformed(problem.values) or problem
     text, _ = module_source(target, method)

@@ -90,7 +90,7 @@ def integrate(problem: Bound, method, *, steps: int | None = None, t_end: float 
     check_integer(every, "--every")
     dt_out = check_dt_out(dt_out)
     check_budgets(problem, method, steps, t_end, every, section, dt_out)
-    external = getattr(method.base.record, "run", None) is not None
+    external = method.kind != "compiled"      # an engine, or Python code: Method.run
     transformed = problem.record.transformed(problem.values)
     if section is not None:
         if dt_out is not None or (not external and effective_dt_out(method, None) is not None):
@@ -133,7 +133,7 @@ def check_budgets(problem: Bound, method, steps, t_end, every, section, dt_out=N
     h = grid_step(method)
     nsteps, h_last = grid(h, steps, t_end)
     columns = problem.record.dim + COUNTERS + 1
-    external = getattr(method.base.record, "run", None) is not None
+    external = method.kind == "external"
     transformed = problem.record.transformed(problem.values) is not None
     adaptive = bool(v.get("adaptive"))
     what = f"{problem.text()} {method.text()}"

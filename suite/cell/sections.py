@@ -124,7 +124,7 @@ def integrate_section(problem, method, crossings: int, steps: int | None = None,
         raise UserError(f"bad locator {locator!r}; allowed: dense, henon")
     rec = problem.record
     sec = section_of(rec)
-    external = getattr(method.base.record, "run", None) is not None
+    external = method.kind != "compiled"
     if external or rec.transformed(problem.values) is not None:
         if locator == "dense":
             raise UserError("dense output does not locate these crossings: external engine or "

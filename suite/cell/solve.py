@@ -1,23 +1,23 @@
-"""``solve``: one cell from its spec strings, through the driver facade.
+"""``solve``: one cell, through the driver facade.
 
-The entry point of ``gnibench solve`` and of most tests: parse and validate the specs
-(:func:`gnibench.suite.cell.spec.prepare`), choose what ``global_error`` is measured against
-(:mod:`gnibench.suite.cell.reference`), integrate (:func:`gnibench.suite.cell.driver.integrate`).
+The entry point of ``gnibench solve`` and of most tests: make the typed cell from spec texts or
+typed values (:func:`gnibench.suite.cell.cellspec.build`: parse and validate, choose what
+``global_error`` is measured against, :mod:`gnibench.suite.cell.reference`) and integrate it
+(:func:`solve_cell`, :func:`gnibench.suite.cell.driver.integrate`).
 """
 from __future__ import annotations
 
+from gnibench.suite.cell.cellspec import CellSpec, build
 from gnibench.suite.cell.driver import integrate
-from gnibench.suite.cell.reference import default_reference, parse_reference
-from gnibench.suite.cell.spec import prepare
 from gnibench.suite.cell.trajectory import Trajectory
 
 
-def solve(problem_text: str, method_text: str, steps: int | None = None,
-          t_end: float | None = None, every: int = 1, reference: str | None = None,
-          section: int | None = None, locator: str | None = None,
-          progress=None, dt_out: float | None = None, budget: int | None = 0) -> Trajectory:
-    """Integrate one cell given by spec strings. Bad input raises UserError; divergence is a
-    status, not an exception.
+def solve(problem, method, steps: int | None = None, t_end: float | None = None,
+          every: int = 1, reference=None, section: int | None = None,
+          locator: str | None = None, progress=None, dt_out: float | None = None,
+          budget: int | None = 0) -> Trajectory:
+    """Integrate one cell given by spec strings (or typed values: a parsed problem and method).
+    Bad input raises UserError; divergence is a status, not an exception.
 
     ``reference`` chooses the reference samples attached to the trajectory (what ``global_error``
     is measured against): ``exact``, ``heyoka[:precision=...,tol=...]``, ``rebound[:tol=...]`` or
@@ -26,12 +26,14 @@ def solve(problem_text: str, method_text: str, steps: int | None = None,
     at t = k D (:mod:`gnibench.suite.cell.timegrid`). ``budget``: steps per call of the compiled
     driver (:func:`gnibench.suite.cell.driver.integrate`).
     """
-    problem, method = prepare(problem_text, method_text)
-    if section is not None:
-        ref = None
-    else:
-        ref = (default_reference(problem.record) if reference is None
-               else parse_reference(reference, problem.record))
-    return integrate(problem, method, steps=steps, t_end=t_end, every=every, dt_out=dt_out,
-                     section=section, locator=locator, reference=ref, progress=progress,
-                     budget=budget)
+    cell = build(problem, method, steps=steps, t_end=t_end, every=every, dt_out=dt_out,
+                 section=section, reference=reference)
+    return solve_cell(cell, locator=locator, progress=progress, budget=budget)
+
+
+def solve_cell(cell: CellSpec, *, locator: str | None = None, progress=None,
+               budget: int | None = 0) -> Trajectory:
+    """Integrate a typed cell (:class:`~gnibench.suite.cell.cellspec.CellSpec`) as it is."""
+    return integrate(cell.problem, cell.method, steps=cell.steps, t_end=cell.t_end,
+                     every=cell.every, dt_out=cell.dt_out, section=cell.section, locator=locator,
+                     reference=cell.reference, progress=progress, budget=budget)

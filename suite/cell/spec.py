@@ -25,12 +25,14 @@ _ID = re.compile(r"^[A-Za-z][A-Za-z0-9_-]*$")
 
 
 def parse_item(text: str, what: str) -> tuple[str, dict[str, str]]:
-    """Split ``id:key=value,...`` into the id and a dict of raw option texts."""
-    text = text.strip()
+    """Split ``id:key=value,...`` into the id and a dict of raw option texts (surrounding spaces
+    are dropped; a line break or another control character anywhere, also at the end, is
+    refused)."""
     bad = next((c for c in text if not c.isprintable()), None)
     if bad is not None:
         raise UserError(f"bad {what} spec {text!r}: it contains {bad!r}; allowed: one line, no "
                         f"control characters")
+    text = text.strip()
     name, _, opts = text.partition(":")
     if not _ID.match(name):
         raise UserError(f"bad {what} spec {text!r}: expected id[:key=value,...]")
@@ -47,20 +49,131 @@ def parse_item(text: str, what: str) -> tuple[str, dict[str, str]]:
     return name, given
 
 
+def split_list(text: str, name: str = "--metrics") -> list[str]:
+    """Split a comma-separated list of specs (``eta,growth:of=H,window=1/2,precession``) at the
+    commas that start a new spec (a comma followed by an id that is not followed by ``=``);
+    an empty spec is refused (``name``: how the user wrote the list)."""
+    parts: list[str] = []
+    for piece in text.split(","):
+        if not piece.strip():
+            raise UserError(f"bad {name} {text!r}: an empty spec between commas; allowed: specs "
+                            f"separated by commas, e.g. eta,growth:of=H")
+        if parts and "=" in piece.partition(":")[0]:
+            parts[-1] += "," + piece          # an option of the previous spec
+        else:
+            parts.append(piece)
+    return parts
+
+
 def split_method(text: str) -> list[str]:
-    """Split a method spec into its base and modifier parts."""
-    return _MODIFIER_SPLIT.split(text.strip())
+    """Split a method spec into its base and modifier parts (as written: :func:`parse_item`
+    drops the spaces around each and refuses control characters)."""
+    return _MODIFIER_SPLIT.split(text)
 
 
 @dataclass(frozen=True)
 class MethodConfig:
-    """A base method and its modifiers, each bound to its option values."""
+    """A base method and its modifiers, each bound to its option values.
+
+    Picklable: its records travel as references to their registries
+    (:mod:`gnibench.suite.foundation.registries`)."""
 
     base: Bound
-    modifiers: tuple[Bound, ...]
+    modifiers: tuple[Bound, ...] = ()
 
     def text(self) -> str:
         return "+".join([self.base.text()] + [m.text() for m in self.modifiers])
+
+    @property
+    def id(self) -> str:
+        return self.base.id
+
+    @property
+    def kind(self) -> str:
+        """How the base method runs: ``compiled``, ``external`` or ``python`` (``Method.kind``)."""
+        return self.base.record.kind
+
+
+# -- the structure of a spec text, without the registries (for tables, reports, the ledger) ----
+
+@dataclass(frozen=True)
+class Item:
+    """One part of a spec text: its id and its options as written (texts, in order)."""
+
+    id: str
+    options: tuple[tuple[str, str], ...] = ()
+
+    @property
+    def given(self) -> dict[str, str]:
+        return dict(self.options)
+
+    def text(self) -> str:
+        return self.id + (":" + ",".join(f"{k}={v}" for k, v in self.options) if self.options
+                          else "")
+
+    def without(self, *keys: str) -> Item:
+        return Item(self.id, tuple((k, v) for k, v in self.options if k not in keys))
+
+    def with_options(self, options: dict[str, str]) -> Item:
+        """The item with these options set (replaced in place, or appended)."""
+        given = {**self.given, **options}
+        return Item(self.id, tuple(given.items()))
+
+
+@dataclass(frozen=True)
+class Structure:
+    """A spec text split into its parts: ``base`` (the problem or base method) and the modifiers.
+
+    A pure function of the text (:func:`structure`): no registry is consulted, so it works on the
+    texts of any table, also for methods this process has not loaded."""
+
+    base: Item
+    modifiers: tuple[Item, ...] = ()
+
+    @property
+    def id(self) -> str:
+        return self.base.id
+
+    @property
+    def key(self) -> str:
+        """Base and modifier ids: ``rk4:h=0.01+observer:theta=1`` -> ``rk4+observer``."""
+        return "+".join([self.base.id] + [m.id for m in self.modifiers])
+
+    def modifier(self, id: str) -> Item | None:
+        return next((m for m in self.modifiers if m.id == id), None)
+
+    def text(self) -> str:
+        return "+".join([self.base.text()] + [m.text() for m in self.modifiers])
+
+    def without(self, *keys: str) -> Structure:
+        """The spec without these options of its base."""
+        return Structure(self.base.without(*keys), self.modifiers)
+
+
+def structure(text: str, what: str = "method") -> Structure:
+    """The parts of a spec text (``what``: ``problem``, ``method``, ``metric``, ``reference``;
+    only a method has modifiers). Raises UserError on text that is not spec syntax."""
+    parts = [text] if what != "method" else split_method(text)
+    items = []
+    for i, part in enumerate(parts):
+        name, given = parse_item(part, what if i == 0 else "modifier")
+        items.append(Item(name, tuple(given.items())))
+    return Structure(items[0], tuple(items[1:]))
+
+
+def item_id(text: str, what: str = "problem") -> str:
+    """The id of a spec text (``kepler-2d:e=0.6`` -> ``kepler-2d``; the base id of a method)."""
+    return structure(text, what).id
+
+
+def with_options(spec: str, target: str, options: dict[str, str]) -> str:
+    """The spec with the options of ``target`` ('problem', 'method' = the base, or a modifier id)
+    set to the given texts; unchanged when ``target`` is a modifier the spec does not have."""
+    s = structure(spec, "problem" if target == "problem" else "method")
+    if target in ("problem", "method"):
+        return Structure(s.base.with_options(options), s.modifiers).text()
+    return Structure(s.base, tuple(m.with_options(options) if m.id == target else m
+                                   for m in s.modifiers)).text()
 
 
 def parse_problem(text: str) -> Bound:
@@ -68,6 +181,8 @@ def parse_problem(text: str) -> Bound:
     from gnibench.problems import REGISTRY
 
     name, given = parse_item(text, "problem")
+    if name not in REGISTRY:
+        _discover()                      # GNIBENCH_LOAD and entry points, once per process
     if name not in REGISTRY:
         raise unknown("problem", name, REGISTRY)
     rec = REGISTRY[name]
@@ -111,6 +226,14 @@ def check_initial_point(rec, values: dict) -> None:
                             f"allowed: a start where the field and the integrals are finite")
 
 
+def _discover() -> None:
+    """User definitions of ``GNIBENCH_LOAD`` and the installed entry points
+    (:mod:`gnibench.suite.cell.user`), looked for the first time an id is unknown."""
+    from gnibench.suite.cell.user.loader import discover
+
+    discover()
+
+
 def _integral_names(rec) -> list[str]:
     from gnibench.problems.codegen import problem_meta
 
@@ -124,6 +247,8 @@ def parse_method(text: str, problem: Bound | None = None) -> MethodConfig:
     parts = split_method(text)
     name, given = parse_item(parts[0], "method")
     name = ALIASES.get(name, name)
+    if name not in METHODS and name not in MODIFIERS:
+        _discover()                      # GNIBENCH_LOAD and entry points, once per process
     if name not in METHODS:
         if name in MODIFIERS:
             raise UserError(f"{name!r} is a modifier, not a base method; write e.g. rk4:h=0.01+{name}")
@@ -164,9 +289,32 @@ def canonical(problem: Bound, method: MethodConfig) -> tuple[str, str]:
     return problem.text(), method.text()
 
 
-def prepare(problem_text: str, method_text: str) -> tuple[Bound, MethodConfig]:
-    """Parse and validate a cell's specs (raises UserError on bad input); a transformed problem's
-    method is checked against the system it integrates."""
-    problem = parse_problem(problem_text)
+def prepare(problem: str | Bound, method: str | MethodConfig) -> tuple[Bound, MethodConfig]:
+    """Parse and validate a cell's specs, given as text or as typed values (raises UserError on
+    bad input); a transformed problem's method is checked against the system it integrates."""
+    if isinstance(problem, str):
+        problem = parse_problem(problem)
+    elif not isinstance(problem, Bound) or getattr(problem.record, "registry", "") != "problem":
+        raise UserError(f"bad problem {problem!r}; allowed: a PROBLEM spec string or a parsed "
+                        f"problem (gnibench.suite.cell.spec.parse_problem)")
     target = problem.record.transformed(problem.values) or problem
-    return problem, parse_method(method_text, target)
+    if isinstance(method, str):
+        return problem, parse_method(method, target)
+    if not isinstance(method, MethodConfig):
+        raise UserError(f"bad method {method!r}; allowed: a METHOD spec string or a parsed method "
+                        f"(gnibench.suite.cell.spec.parse_method)")
+    return problem, _checked(method, target)
+
+
+def _checked(method: MethodConfig, problem: Bound) -> MethodConfig:
+    """A method parsed without (or for another) problem, checked against this one: its
+    modifiers resolved for the problem (observed integrals, targets), its structure needs."""
+    rec = method.base.record
+    mods = []
+    for m in method.modifiers:
+        if m.record.kind == "field" and rec.field_modifiers_refused:
+            raise UserError(f"method {rec.id} cannot take a field modifier (+{m.id}): "
+                            f"{rec.field_modifiers_refused}; use +projection, or another method")
+        mods.append(Bound(m.record, m.record.resolve(dict(m.values), problem)))
+    rec.check_structure(problem.record, has_modifiers=bool(mods))
+    return MethodConfig(method.base, tuple(mods))

@@ -59,6 +59,21 @@ def check_output_file(path: Path) -> None:
         raise UserError(f"bad -o {path}: not writable")
 
 
+def _load_option(parser) -> None:
+    parser.add_argument("--load", action="append", default=[], metavar="FILE",
+                        help="a TOML file of user definitions ([[problem]], [[method]]); "
+                             "repeatable (also GNIBENCH_LOAD=FILE:FILE)")
+
+
+def _definitions(a) -> None:
+    """User definitions: GNIBENCH_LOAD and the entry points, then each --load FILE."""
+    from gnibench.suite.cell.user.loader import discover, load
+
+    discover()
+    for path in a.load:
+        load(path)
+
+
 def _parser() -> argparse.ArgumentParser:
     p = _Parser(prog="gnibench", description="Benchmark integrators of ODEs with first integrals.")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
@@ -87,10 +102,12 @@ def _parser() -> argparse.ArgumentParser:
     s.add_argument("--section", type=int, metavar="K",
                    help="integrate until K crossings of the problem's Poincaré section (within "
                         "--t-end / --steps) and write the section points (suite/cell/sections.py)")
+    _load_option(s)
 
     ls = sub.add_parser("list", help="list problems, methods or metrics")
     ls.add_argument("what", choices=("problems", "methods", "metrics"))
     ls.add_argument("--format", choices=("table", "json"), default="table")
+    _load_option(ls)
 
     r = sub.add_parser("run", help="run an experiment (TOML file or shipped name)")
     r.add_argument("experiment", help="path to a TOML file, or the name of a shipped experiment")
@@ -108,6 +125,7 @@ def _parser() -> argparse.ArgumentParser:
                    help="ignore the cells stored by earlier runs in the output directory")
     r.add_argument("--scale", default="paper", metavar="paper|quick",
                    help="the experiment's paper scale (default) or its shortened quick scale")
+    _load_option(r)
 
     from gnibench.suite.cli.reproduce import add_parser
 
@@ -158,8 +176,9 @@ def _parser() -> argparse.ArgumentParser:
 
 def _solve(a) -> int:
     from gnibench.suite.cell.driver import Interrupted
-    from gnibench.suite.cell.solve import solve
-    from gnibench.suite.metrics.compute import apply, parse_metrics
+    from gnibench.suite.cell.solve import solve_cell
+    from gnibench.suite.metrics.cells import make_cell
+    from gnibench.suite.metrics.compute import apply
     from gnibench.suite.runs.progress import SolveProgress
     from gnibench.suite.runs.storage import write_result
 
@@ -167,7 +186,6 @@ def _solve(a) -> int:
         raise UserError("--format parquet needs -o FILE (binary output is not written to stdout)")
     if a.output is not None:
         check_output_file(a.output)
-    choices = parse_metrics(a.metrics or "")
     if a.section is not None:
         if a.every != 1:
             raise UserError("--every does not apply with --section (the section points are written)")
@@ -177,22 +195,18 @@ def _solve(a) -> int:
         if a.dt_out is not None:
             raise UserError("--dt-out does not apply with --section (the section points are "
                             "written)")
-    if a.section is None and a.metrics:           # eta: samples at whole periods t = nT
-        from gnibench.suite.cell.spec import prepare
-        from gnibench.suite.metrics.compute import period_grid
-
-        a.dt_out = period_grid(choices, *prepare(a.problem, a.method), a.every, a.dt_out)
+    cell = make_cell(a.problem, a.method, steps=a.steps, t_end=a.t_end, every=a.every,
+                     dt_out=a.dt_out, section=a.section, reference=a.reference,
+                     metrics=() if a.metrics is None else a.metrics)
     progress = SolveProgress(f"{a.problem} {a.method}")
     interrupted = None
     try:
-        traj = solve(a.problem, a.method, steps=a.steps, t_end=a.t_end, every=a.every,
-                     reference=a.reference, section=a.section, dt_out=a.dt_out,
-                     progress=progress)
+        traj = solve_cell(cell, progress=progress)
     except Interrupted as e:              # keep what was computed, then exit 130
         traj, interrupted = e.partial, e
     finally:
         progress.close()
-    metrics, skipped = apply(traj, choices)
+    metrics, skipped = apply(traj, cell.metrics, problem=cell.problem)
     write_result(traj, metrics, a.format, a.output, sys.stdout)
     if interrupted is not None:
         raise interrupted
@@ -279,6 +293,8 @@ def main(argv=None) -> int:
 
         commands = {"solve": _solve, "list": _list, "run": _run, "reproduce": _reproduce,
                     "bench": _bench, "report": _report}
+        if a.command in ("solve", "list", "run"):
+            _definitions(a)
         if a.command == "verify":
             from gnibench.suite.cli.verify import verify_command
 

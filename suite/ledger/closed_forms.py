@@ -28,6 +28,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from gnibench.suite.cell.spec import item_id
 from gnibench.suite.ledger import closed_forms_b7, closed_forms_b41, closed_forms_hlw
 from gnibench.suite.ledger.closed_forms_b6 import gs_section_trace
 
@@ -39,25 +40,23 @@ _ENERGIES = {"harmonic-oscillator": {"states": (("q", "p"),), "H": (1.0,)},
 
 def _method(text: str):
     """(h, {observed integral: theta}, mode) of an 'euler[+observer...]' canonical spec."""
-    from gnibench.suite.cell.spec import parse_item, split_method
+    from gnibench.suite.cell.spec import parse_method
 
-    parts = split_method(text)
-    name, base = parse_item(parts[0], "method")
-    if name != "euler":
-        raise ValueError(f"the closed form is for explicit Euler, not {name}")
+    method = parse_method(text)
+    if method.id != "euler":
+        raise ValueError(f"the closed form is for explicit Euler, not {method.id}")
     observed, mode = {}, "simple"
-    for part in parts[1:]:
-        mname, opts = parse_item(part, "modifier")
-        if mname != "observer":
-            raise ValueError(f"the closed form covers the observer only, not +{mname}")
-        mode = opts.get("mode", "simple")
-        on = opts["on"].split("/")
-        theta = [float(x) for x in opts.get("theta", "1").split("/")]
+    for m in method.modifiers:
+        if m.id != "observer":
+            raise ValueError(f"the closed form covers the observer only, not +{m.id}")
+        mode = m.values["mode"]
+        on = list(m.values["on"])
+        theta = list(m.values["theta"])
         theta = theta * len(on) if len(theta) == 1 else theta
         observed = dict(zip(on, theta))
     if mode != "simple":
         raise ValueError("the closed form is for the simple observer")
-    return float(base["h"]), observed
+    return float(method.base.values["h"]), observed
 
 
 def energy_recurrence(problem_id: str, E0: np.ndarray, h: float, observed: dict,
@@ -89,7 +88,7 @@ def euler_oscillator_energy(cells, samples) -> dict:
     selected cells; also the fitted and closed-form growth rates of ln|err| per step."""
     deviation, rates, closed = 0.0, [], []
     for row in cells.itertuples():
-        pid = row.problem.partition(":")[0]
+        pid = item_id(row.problem)
         spec = _ENERGIES[pid]
         names = [k for k in spec if k != "states"]
         h, observed = _method(row.method)
@@ -163,15 +162,15 @@ def main_lemma_decay(cells, samples) -> dict:
     """Slopes of ln|ε_i| against t (they must be −θ_i) and the worst violation of (2.8),
     max (‖ε(t)‖ − 4 ulp(H0)) / (‖ε(0)‖ e^{−ηt}) − 1 (ε is known to the round-off of the integrals)."""
     from gnibench.problems.codegen import problem_meta, python_functions
-    from gnibench.suite.cell.spec import parse_item, parse_problem, split_method
+    from gnibench.suite.cell.spec import parse_method, parse_problem
 
     slope_error, violation = 0.0, -math.inf
     for row in cells.itertuples():
         problem = parse_problem(row.problem)
-        _, opts = parse_item(split_method(row.method)[1], "modifier")
-        on = opts["on"].split("/")
-        theta = np.array([float(x) for x in opts["theta"].split("/")]) * np.ones(len(on))
-        targets = np.array([float(x) for x in opts["H0"].split("/")]) * np.ones(len(on))
+        opts = parse_method(row.method).modifiers[0].values
+        on = list(opts["on"])
+        theta = np.array(opts["theta"], dtype=float) * np.ones(len(on))
+        targets = np.array(opts["H0"], dtype=float) * np.ones(len(on))
         rows = samples[samples["cell"] == row.cell]
         fns = python_functions(problem.record)
         names = problem_meta(problem.record)["integrals"]

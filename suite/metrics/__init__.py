@@ -4,6 +4,7 @@ See :mod:`gnibench.suite.metrics.base` for the record, :mod:`gnibench.suite.metr
 for how metrics are chosen and applied, and :mod:`gnibench.suite.metrics.families` for the metrics
 computed across the cells of an experiment that differ only in h.
 """
+from gnibench.suite.foundation.registries import register
 from gnibench.suite.metrics import (
     global_error,
     growth,
@@ -24,3 +25,11 @@ METRICS = {m.id: m for m in (
     order.order,
     section_stats.section_stats,
 )}
+
+
+def lookup(id: str):
+    """The metric record ``id``, or None."""
+    return METRICS.get(id)
+
+
+register("metric", lookup)

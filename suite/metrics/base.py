@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 from gnibench.suite.foundation.params import Param
+from gnibench.suite.foundation.registries import Registered
 
 #: what a metric may need from a cell (``Metric.needs``), and what that means
 NEEDS = {
@@ -48,7 +49,7 @@ class MetricOutput:
 
 
 @dataclass(frozen=True)
-class Metric:
+class Metric(Registered):
     """A self-describing metric.
 
     ``compute(trajectory, problem, values) -> MetricOutput``; ``values`` are the metric's options,
@@ -64,6 +65,8 @@ class Metric:
     the cells and samples tables of one family (cells equal in everything but h), returning one
     row per cell (index: cell id) of columns for ``cells.parquet``.
     """
+
+    registry = "metric"
 
     id: str
     title: str

@@ -1,7 +1,7 @@
 """Choosing metrics (spec syntax), applying them to a trajectory, and the sampling they need."""
 from __future__ import annotations
 
-from gnibench.suite.cell.spec import parse_item, parse_problem
+from gnibench.suite.cell.spec import parse_item, parse_problem, split_list
 from gnibench.suite.foundation.errors import UserError, unknown
 from gnibench.suite.foundation.params import bind
 from gnibench.suite.metrics import METRICS
@@ -22,29 +22,17 @@ def parse_metric(text: str) -> MetricChoice:
 
 
 def parse_metrics(texts) -> tuple[MetricChoice, ...]:
-    """A list of metric specs (or one comma-separated string of ids without options)."""
+    """A list of metric specs or choices (or one comma-separated string of them, as
+    ``--metrics`` gives it)."""
     if isinstance(texts, str):
-        texts = _split(texts)
-    choices = tuple(parse_metric(t) for t in texts)
+        texts = split_list(texts, "--metrics")
+    choices = tuple(t if isinstance(t, MetricChoice) else parse_metric(t) for t in texts)
     ids = [c.metric.id for c in choices]
     for i, x in enumerate(ids):
         if x in ids[:i]:
             raise UserError(f"metric {x!r} chosen twice; allowed: each metric once (one choice "
                             f"takes lists, e.g. growth:of=H/L/global)")
     return choices
-
-
-def _split(text: str) -> list[str]:
-    """Split ``eta,growth:of=H,window=1/2,precession`` at the commas that start a new metric
-    (a comma followed by an id that is not followed by ``=``)."""
-    parts: list[str] = []
-    for piece in text.split(","):
-        piece = piece.strip()
-        if parts and "=" in piece.split(":")[0]:
-            parts[-1] += "," + piece          # an option of the previous metric
-        elif piece:
-            parts.append(piece)
-    return parts
 
 
 def selected(choices=()) -> list[MetricChoice]:
@@ -60,8 +48,8 @@ def apply(traj, choices=(), problem=None, families: bool = True) -> tuple[Metric
                                                                           dict[str, str]]:
     """Compute the default and chosen metrics of one trajectory.
 
-    ``problem`` is the parsed problem; by default it is parsed back from the trajectory's
-    canonical spec. Returns the merged outputs and, for each chosen metric that does not apply,
+    ``problem`` is the parsed problem (the typed cell's); without it, it is parsed back from the
+    trajectory's canonical spec (a trajectory made outside a typed cell). Returns the merged outputs and, for each chosen metric that does not apply,
     why (default metrics that do not apply are skipped silently, e.g. global error without a
     reference). A family metric never applies to one trajectory: with ``families`` it is reported
     as such (``gnibench solve``), without it is left silently to the runner, which computes it
@@ -131,7 +119,7 @@ def period_grid(choices, problem, method, every: int = 1, dt_out: float | None =
         return None
     period = needs["dt_out"]
     v = method.base.values
-    external = getattr(method.base.record, "run", None) is not None
+    external = method.kind == "external"
     transformed = problem.record.transformed(problem.values) is not None
     if not (v.get("adaptive") or external or transformed):
         n = steps_per_period(grid_step(method), period)

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
-from gnibench.suite.cell.spec import parse_item, split_method
+from gnibench.suite.cell.spec import structure
 
 SEPARATOR = ";"          # between the metric texts of a cell (the texts contain commas)
 
@@ -36,11 +36,7 @@ def split_metrics(text) -> list[str]:
 
 def method_without_step(method: str) -> str:
     """The canonical method text without the base option h (modifiers kept)."""
-    parts = split_method(method)
-    name, given = parse_item(parts[0], "method")
-    given.pop("h", None)
-    base = name + (":" + ",".join(f"{k}={v}" for k, v in given.items()) if given else "")
-    return "+".join([base] + parts[1:])
+    return structure(method).without("h").text()
 
 
 def final_time(row: pd.Series) -> str:

@@ -52,20 +52,19 @@ def _throttled(cell_id: int, report) -> Callable[[float], None]:
 
 
 def run_cell(cell, report: Callable[[int, float], None] | None = None) -> CellOutcome:
-    """Solve one cell, apply its metrics, and build its rows."""
-    from gnibench.suite.cell.solve import solve
-    from gnibench.suite.metrics.compute import apply, parse_metrics
+    """Solve one cell (its typed cell, ``cell.spec``, as it is), apply its metrics, and build its
+    rows."""
+    from gnibench.suite.cell.solve import solve_cell
+    from gnibench.suite.metrics.compute import apply
     from gnibench.suite.runs.tables import cell_row, cell_samples, timing_row
 
     report = report or _reporter
     progress = _throttled(cell.id, report) if report is not None else None
     try:
         with np.errstate(all="ignore"):     # overflow in a diverging cell is a status, not noise
-            traj = solve(cell.problem_spec, cell.method_spec, steps=cell.steps,
-                         t_end=cell.t_end, every=cell.every, dt_out=cell.dt_out,
-                         section=getattr(cell, "section", None),
-                         reference=getattr(cell, "reference", None), progress=progress)
-            metrics, skipped = apply(traj, parse_metrics(cell.metrics), families=False)
+            traj = solve_cell(cell.spec, progress=progress)
+            metrics, skipped = apply(traj, cell.spec.metrics, problem=cell.spec.problem,
+                                     families=False)
             samples = cell_samples(cell, traj, metrics)
             row = cell_row(cell, traj, metrics, skipped=skipped)
     except Exception as e:  # noqa: BLE001 - any failure of one cell is recorded, the run goes on
@@ -82,7 +81,5 @@ def kernel_group(cell) -> str:
     or the external engine): executors run the first cell of a group before the others, so a
     kernel is compiled once and then loaded from the disk cache."""
     from gnibench.suite.cell.compiled import kernel_key
-    from gnibench.suite.cell.spec import prepare
 
-    problem, method = prepare(cell.problem_spec, cell.method_spec)
-    return kernel_key(problem, method)
+    return kernel_key(cell.spec.problem, cell.spec.method)

@@ -26,51 +26,15 @@ from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from gnibench.suite.cell.spec import parse_item, split_method
+from gnibench.suite.cell.spec import structure, with_options
 from gnibench.suite.foundation.budgets import check_count
 from gnibench.suite.foundation.errors import UserError, unknown
 from gnibench.suite.foundation.params import format_float
 from gnibench.suite.foundation.tomlfile import MAX_CHARS, load_toml
+from gnibench.suite.runs.cell import Cell
 
 if TYPE_CHECKING:          # the schema (pydantic) is imported when a file is parsed, not by workers
     from gnibench.suite.runs.experiment_schema import ExperimentFile, Group
-
-
-@dataclass(frozen=True)
-class Cell:
-    """One problem x method x horizon: the unit of work of the runner.
-
-    ``problem_spec``/``method_spec`` are the texts given to :func:`gnibench.suite.cell.solve.solve`;
-    ``problem``/``method`` are their canonical texts (what the tables show); ``metrics`` the
-    canonical texts of the chosen metrics (beside the default ones); ``reference`` the canonical
-    text of the chosen reference solution (:func:`gnibench.suite.cell.reference.parse_reference`:
-    ``exact``, ``heyoka:precision=...,tol=...``, ``rebound:tol=...`` or ``none``), None for the
-    default (the exact solution where the problem has one).
-    """
-
-    id: int
-    group: int
-    label: str
-    problem_spec: str
-    method_spec: str
-    problem: str
-    method: str
-    h: float
-    steps: int | None
-    t_end: float | None
-    every: int
-    nsteps: int
-    t_final: float
-    metrics: tuple[str, ...] = ()
-    dt_out: float | None = None     # time grid (suite/cell/timegrid.py); the specs stay as given
-    reference: str | None = None
-    section: int | None = None      # crossings of the problem's Poincaré section (suite/cell/sections.py)
-
-    def described(self) -> dict:
-        """What the tables' metadata records of the cell (and a redraw compares)."""
-        return {"cell": self.id, "problem": self.problem, "method": self.method,
-                "steps": self.steps, "t_end": self.t_end, "every": self.every,
-                "dt_out": self.dt_out, "reference": self.reference, "section": self.section}
 
 
 @dataclass(frozen=True)
@@ -108,7 +72,7 @@ def load_experiment(name_or_path: str | Path, scale: str = "paper") -> Experimen
             raise UserError(f"experiment file {arg!r} is {path.stat().st_size} bytes; allowed: "
                             f"a TOML file of at most {MAX_CHARS} characters")
         try:
-            text, source = path.read_text(encoding="utf-8"), path.name
+            text, source, base = path.read_text(encoding="utf-8"), path.name, path.parent
         except UnicodeDecodeError as e:
             raise UserError(f"experiment file {arg!r} is not UTF-8 text (byte {e.start}); allowed: "
                             f"a TOML file in UTF-8") from None
@@ -118,13 +82,15 @@ def load_experiment(name_or_path: str | Path, scale: str = "paper") -> Experimen
         known = shipped()
         if arg not in known:
             raise unknown("experiment", arg, known)
-        text, source = known[arg], f"{arg}.toml"
-    return parse_experiment(text, source, scale)
+        text, source, base = known[arg], f"{arg}.toml", None
+    return parse_experiment(text, source, scale, base)
 
 
-def parse_experiment(text: str, source: str, scale: str = "paper") -> Experiment:
+def parse_experiment(text: str, source: str, scale: str = "paper",
+                     base: Path | None = None) -> Experiment:
     """Validate an experiment's TOML text at a scale and expand its cells (``source`` names it
-    in errors); a ``[figure]`` section is validated against the cells
+    in errors; ``base``: the directory its ``load`` paths are relative to, default the working
+    directory); a ``[figure]`` section is validated against the cells
     (:mod:`gnibench.suite.runs.figure_spec`)."""
     from gnibench.suite.foundation.records import validate
     from gnibench.suite.runs.experiment_schema import ExperimentFile
@@ -135,6 +101,7 @@ def parse_experiment(text: str, source: str, scale: str = "paper") -> Experiment
     validate(ExperimentFile, doc, source)        # every key, of every scale, before any applies
     stated = scales_stated(doc)
     top = validate(ExperimentFile, at_scale(doc, scale), source)
+    _load(top.load, base)                        # user definitions, before the cells are read
     groups = top.cells
     planned = sum(_planned_cells(g) for g in groups)
     check_count(planned, f"{source}", "GNIBENCH_MAX_CELLS", "cells")
@@ -179,21 +146,19 @@ def _planned_cells(group: Group) -> int:
     return n
 
 
-def _reference(text: str | None, problem) -> str | None:
-    """The canonical text of a cell's reference solution (None: the problem's default)."""
-    from gnibench.suite.cell.reference import parse_reference
+def _load(paths: list[str], base: Path | None) -> None:
+    """The experiment's user definitions (``load = ["defs.toml"]``, :mod:`gnibench.suite.cell.user`),
+    relative to the experiment file."""
+    from gnibench.suite.cell.user.loader import load
 
-    if text is None:
-        return None
-    spec = parse_reference(text, problem.record)
-    return "none" if spec is None else spec.text()
+    for p in paths:
+        load(Path(base or ".") / p)
 
 
-def _check_metrics(metrics: tuple[str, ...], problems: list, where: str) -> None:
+def _check_metrics(choices, problems: list, where: str) -> None:
     """Each chosen metric must be able to apply to at least one problem of the group."""
-    from gnibench.suite.metrics.compute import not_applicable, parse_metrics
+    from gnibench.suite.metrics.compute import not_applicable
 
-    choices = parse_metrics(list(metrics))
     reasons = [not_applicable(choices, p) for p in problems]
     for c in choices:
         if all(c.text() in r for r in reasons):
@@ -210,26 +175,10 @@ def _vary(group: Group) -> tuple[list[tuple[str, str, list[str]]], ...]:
     return problem_vary, method_vary
 
 
-def with_options(spec: str, target: str, options: dict[str, str]) -> str:
-    """The spec with the options of ``target`` ('problem', 'method' = the base, or a modifier id)
-    set to the given texts; unchanged when ``target`` is a modifier the spec does not have."""
-    parts = [spec] if target == "problem" else split_method(spec)
-    out = []
-    for i, part in enumerate(parts):
-        name, given = parse_item(part, "problem" if target == "problem" else "method")
-        if (i == 0 and target in ("problem", "method")) or (i > 0 and name == target):
-            given = {**given, **options}
-        out.append(name + (":" + ",".join(f"{k}={v}" for k, v in given.items()) if given else ""))
-    return "+".join(out)
-
-
 def _expand(group: Group, gi: int, defaults: ExperimentFile, where: str, first_id: int
             ) -> list[Cell]:
-    from gnibench.suite.cell.driver import check_budgets
-    from gnibench.suite.cell.grid import grid, grid_step
-    from gnibench.suite.cell.spec import prepare
-    from gnibench.suite.cell.timegrid import effective_dt_out, engine_method
-    from gnibench.suite.metrics.compute import parse_metrics, period_grid
+    from gnibench.suite.metrics.cells import make_cell
+    from gnibench.suite.metrics.compute import parse_metrics
 
     label, problems, methods = group.label, group.problems, group.methods
     steps, t_end, every = _horizon(group, defaults, where)
@@ -249,8 +198,11 @@ def _expand(group: Group, gi: int, defaults: ExperimentFile, where: str, first_i
 
         points = [{k: format_float(v) for k, v in p.items()}
                   for p in point_options(group.points, where)]
+    try:
+        modifiers = {mod.id for m in methods for mod in structure(m).modifiers}
+    except UserError as e:
+        raise UserError(f"{where}: {e}") from None
     for target, opt, _ in method_vary:
-        modifiers = {part.partition(":")[0].strip() for m in methods for part in split_method(m)[1:]}
         if target != "method" and target not in modifiers:
             raise UserError(f"{where}: vary.{target}.{opt}: no method of the group has the "
                             f"modifier {target!r}")
@@ -265,29 +217,14 @@ def _expand(group: Group, gi: int, defaults: ExperimentFile, where: str, first_i
                 pspec = _apply(pspec, problem_vary, pvals)
                 mspec = _apply(mgiven, method_vary, mvals)
                 here = f"{where}: {pspec} {mspec}"
-                problem, method = prepare(pspec, mspec)
-                parsed_problems.append(problem)
-                external = getattr(method.base.record, "run", None) is not None
-                cell_dt_out = dt_out if section is not None else period_grid(
-                    metric_choices, problem, method, every, dt_out)   # eta: samples at t = nT
-                if cell_dt_out is not None and external:  # an engine's dt_out is its own grid
-                    method = engine_method(method, cell_dt_out, problem)
-                elif cell_dt_out is not None:
-                    effective_dt_out(method, cell_dt_out)  # refuses a conflicting method option
-                h = grid_step(method)
-                nsteps, h_last = grid(h, steps, t_end)
-                check_budgets(problem, method, steps, t_end, every, section, cell_dt_out)
-                if section is not None and not problem.record.sections:
-                    raise UserError(f"problem {problem.record.id!r} has no Poincaré section; "
-                                    "allowed: a group without section")
-                ref = None if section is not None else _reference(reference, problem)
+                spec = make_cell(pspec, mspec, steps=steps, t_end=t_end, every=every,
+                                 dt_out=dt_out, section=section, reference=reference,
+                                 metrics=metric_choices)
             except UserError as e:
                 raise UserError(f"{here}: {e}") from None
-            cells.append(Cell(first_id + len(cells), gi, label, pspec, mspec, problem.text(),
-                              method.text(), h, steps, t_end, every, nsteps,
-                              (nsteps - 1) * h + h_last, metrics, dt_out=cell_dt_out, reference=ref,
-                              section=section))
-    _check_metrics(metrics, parsed_problems, where)
+            parsed_problems.append(spec.problem)
+            cells.append(Cell(first_id + len(cells), gi, label, spec))
+    _check_metrics(metric_choices, parsed_problems, where)
     return cells
 
 

@@ -225,11 +225,9 @@ def restamp(part: Part | None, cell) -> Part | None:
 def experiment_states(experiment: Experiment) -> tuple[str, ...]:
     """The state names of all the experiment's problems, in order of first appearance (so the
     samples table has the same columns whichever cells are done)."""
-    from gnibench.problems import REGISTRY
-
     names: list[str] = []
     for c in experiment.cells:
-        for s in REGISTRY[c.problem.partition(":")[0]].state:
+        for s in c.spec.problem.record.state:
             if s not in names:
                 names.append(s)
     return tuple(names)

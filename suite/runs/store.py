@@ -11,7 +11,8 @@ Layout of ``<out>/``::
                                finish and at the end)
 
 The key of a part is a content hash of everything that determines its numbers: the canonical cell
-(problem and method specs, horizon, sampling, metrics, reference solution), the source code that computes it
+(problem and method specs, horizon, sampling, metrics, reference solution; the text of a user
+definition, :mod:`gnibench.suite.cell.user`), the source code that computes it
 (problems, methods and their kernels, the cell layer, the metrics and the tables: a fingerprint of
 those files) and the package versions. Running the same experiment again reuses every part whose
 key matches and computes only the missing cells; a cell whose spec or code changed gets a new key
@@ -74,6 +75,11 @@ def cell_key(cell) -> str:
         doc["reference"] = cell.reference
     if getattr(cell, "section", None) is not None:       # crossings instead of samples
         doc["section"] = cell.section
+    spec = getattr(cell, "spec", None)
+    defs = [] if spec is None else [r.definition for r in (spec.problem.record,
+                                                            spec.method.base.record) if r.definition]
+    if defs:                               # user definitions: their text (and Python code's hash)
+        doc["definitions"] = hashlib.sha256("\n".join(defs).encode()).hexdigest()
     return hashlib.sha256(json.dumps(doc, sort_keys=True, default=str).encode()).hexdigest()[:32]
 
 

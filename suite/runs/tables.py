@@ -74,7 +74,7 @@ def cell_row(cell, traj=None, metrics=None, status: str = "pending", reason: str
 
     notes = "; ".join(f"{k}: {v}" for k, v in (skipped or {}).items())
     row = {"cell": cell.id, "group": cell.group, "label": cell.label, "problem": cell.problem,
-           "method": cell.method, "h": cell.h,
+           "method": cell.method, "method_kind": cell.method_kind, "h": cell.h,
            "t_end": np.nan if cell.t_end is None else cell.t_end,
            "steps_planned": cell.nsteps, "every": cell.every,
            "dt_out": np.nan if cell.dt_out is None else cell.dt_out,
@@ -138,7 +138,7 @@ def samples_table(parts: list[tuple[pd.DataFrame, tuple[str, ...]]],
     return df[list(SAMPLE_FRONT) + states + errors + tail + rest]
 
 
-_CELL_COLUMNS = ("cell", "group", "label", "problem", "method", "h", "t_end", "steps_planned",
+_CELL_COLUMNS = ("cell", "group", "label", "problem", "method", "method_kind", "h", "t_end", "steps_planned",
                  "every", "dt_out", "section", "status", "reason", "steps", "t_final", "nfev", "njev", "samples",
                  "integrals", "reference", "metrics", "metric_notes")
 

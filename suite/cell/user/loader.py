@@ -1,0 +1,184 @@
+"""Loading user definitions: files, ``GNIBENCH_LOAD``, entry points; registering their records.
+
+* :func:`load` reads a TOML file of ``[[problem]]`` and ``[[method]]`` entries (``--load FILE``,
+  an experiment's ``load = [...]``, ``gnibench.load(path)``). All its entries are built and
+  checked first, then registered together; nothing is registered when one fails.
+* :func:`discover` loads, once per process, the files of ``GNIBENCH_LOAD`` (paths separated by
+  ``:``) and the entry points of the groups ``gnibench.problems`` and ``gnibench.methods``. An
+  entry point names a definition table (a dict with the keys of a file's entry; ``id`` defaults to
+  the entry point's name), a list of them, or a function returning either.
+
+Every record carries its :class:`Origin` (the file's path and text, or the entry point), so a
+worker process that lacks it (a Dask worker started by spawn) defines it before resolving a
+pickled reference (:mod:`gnibench.suite.foundation.registries`). A user id that collides with a
+shipped id, or with one of another origin, is refused; loading the same file again is a no-op,
+and a changed file replaces its own earlier definitions.
+"""
+from __future__ import annotations
+
+import hashlib
+import os
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+from gnibench.suite.cell.user.entries import Entry
+from gnibench.suite.foundation.errors import UserError
+
+GROUPS = {"gnibench.problems": "problem", "gnibench.methods": "method"}
+ENV = "GNIBENCH_LOAD"
+
+
+@dataclass(frozen=True)
+class Origin:
+    """Where definitions come from: ``file`` (``name`` its resolved path, ``text`` its content)
+    or ``entry-point`` (``name`` = ``group:name``, ``text`` the group)."""
+
+    kind: str
+    name: str
+    text: str = ""
+
+    def load(self) -> None:
+        """Define this origin's records in this process (from the text it carries)."""
+        if self.kind == "file":
+            _load_text(self, self.text)
+        else:
+            _load_entry_point(self.text, self.name[len(self.text) + 1:])
+
+    def __str__(self) -> str:
+        return self.name
+
+
+#: origin name -> (digest of its text, [(kind, id)])
+_LOADED: dict[str, tuple[str, list[tuple[str, str]]]] = {}
+_discovered = False
+
+
+def load(path) -> list[str]:
+    """Load a definitions file; returns the ids it defines. Raises UserError naming the file,
+    entry and key of a bad definition."""
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise UserError(f"no definitions file {str(path)!r}") from None
+    except UnicodeDecodeError as e:
+        raise UserError(f"definitions file {str(path)!r} is not UTF-8 text (byte {e.start})") \
+            from None
+    except OSError as e:
+        raise UserError(f"cannot read definitions file {str(path)!r} ({e.strerror})") from None
+    return _load_text(Origin("file", str(p.resolve()), text), text)
+
+
+def discover() -> None:
+    """Load ``GNIBENCH_LOAD`` and the installed entry points, once per process."""
+    global _discovered
+    if _discovered:
+        return
+    _discovered = True
+    for path in os.environ.get(ENV, "").split(os.pathsep):       # ":" (";" on Windows)
+        if path.strip():
+            load(path.strip())
+    from importlib.metadata import entry_points
+
+    for group in GROUPS:
+        for ep in entry_points(group=group):
+            _load_entry_point(group, ep.name)
+
+
+def loaded() -> dict[str, list[tuple[str, str]]]:
+    """The origins loaded in this process and the (kind, id) each defined."""
+    return {name: list(ids) for name, (_, ids) in _LOADED.items()}
+
+
+def unload(name: str | Path | None = None) -> None:
+    """Remove the records of one origin (a file path or ``group:name``), or of all."""
+    from gnibench.methods import METHODS
+    from gnibench.problems import REGISTRY
+
+    names = list(_LOADED) if name is None else [str(Path(name).resolve()) if Path(
+        name).exists() else str(name)]
+    for n in names:
+        _, ids = _LOADED.pop(n, ("", []))
+        for kind, rid in ids:
+            (REGISTRY if kind == "problem" else METHODS).pop(rid, None)
+
+
+def _load_text(origin: Origin, text: str) -> list[str]:
+    digest = hashlib.sha256(text.encode()).hexdigest()
+    if origin.name in _LOADED:
+        if _LOADED[origin.name][0] == digest:
+            return [rid for _, rid in _LOADED[origin.name][1]]
+        unload(origin.name)                          # the file changed: its new definitions
+    try:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise UserError(f"{origin.name}: not valid TOML: {e}") from None
+    bad = [k for k in doc if k not in ("problem", "method")]
+    if bad:
+        raise UserError(f"{origin.name}: unknown key {bad[0]!r}; allowed: [[problem]] and "
+                        f"[[method]] entries")
+    tables = []
+    for kind in ("problem", "method"):
+        entries = doc.get(kind, [])
+        if not isinstance(entries, list) or not all(isinstance(t, dict) for t in entries):
+            raise UserError(f"{origin.name}: {kind} must be an array of tables ([[{kind}]])")
+        tables += [Entry(origin.name, kind, k, t) for k, t in enumerate(entries, 1)]
+    return _register(origin, digest, tables)
+
+
+def _load_entry_point(group: str, name: str) -> list[str]:
+    from importlib.metadata import entry_points
+
+    origin = Origin("entry-point", f"{group}:{name}", group)
+    if origin.name in _LOADED:
+        return [rid for _, rid in _LOADED[origin.name][1]]
+    found = [ep for ep in entry_points(group=group) if ep.name == name]
+    if not found:
+        raise UserError(f"no entry point {name!r} in the group {group}")
+    try:
+        obj = found[0].load()
+        obj = obj() if callable(obj) else obj
+    except Exception as e:  # noqa: BLE001 - a broken plugin: one line naming it
+        raise UserError(f"entry point {origin.name} ({found[0].value}) cannot be loaded: "
+                        f"{type(e).__name__}: {e}") from None
+    items = obj if isinstance(obj, list) else [obj]
+    if not all(isinstance(t, dict) for t in items):
+        raise UserError(f"entry point {origin.name} gives {type(obj).__name__}; allowed: a "
+                        f"definition table (dict), a list of them, or a function returning either")
+    kind = GROUPS[group]
+    tables = [Entry(f"entry point {origin.name}", kind, k, {"id": name, **t})
+              for k, t in enumerate(items, 1)]
+    return _register(origin, "", tables)
+
+
+def _register(origin: Origin, digest: str, tables: list[Entry]) -> list[str]:
+    """Build every entry, check the ids, then register them all."""
+    from gnibench.methods import ALIASES, METHODS, MODIFIERS
+    from gnibench.problems import INTERNAL, REGISTRY
+    from gnibench.suite.cell.user.methods import build_method
+    from gnibench.suite.cell.user.problems import build_problem
+
+    built: dict[tuple[str, str], object] = {}
+
+    def known(mid: str):
+        return built.get(("method", mid)) or METHODS.get(ALIASES.get(mid, mid))
+
+    for e in tables:
+        rid = e.ident()
+        taken = {"problem": (REGISTRY, INTERNAL), "method": (METHODS, ALIASES, MODIFIERS)}[e.kind]
+        owner = next((r for r in taken if rid in r), None)
+        if owner is not None or (e.kind, rid) in built:
+            record = owner.get(rid) if isinstance(owner, dict) else None
+            where = getattr(record, "origin", None)
+            what = f"the one of {where}" if where is not None else "a shipped one"
+            if (e.kind, rid) in built:
+                what = "another entry of this file"
+            raise e.error("id", f"{e.kind} id {rid!r} collides with {what}; allowed: an id that "
+                                f"is not taken (gnibench list {e.kind}s)")
+        record = build_problem(e, origin) if e.kind == "problem" else build_method(e, origin, known)
+        built[(e.kind, rid)] = record
+    for (kind, rid), record in built.items():
+        (REGISTRY if kind == "problem" else METHODS)[rid] = record
+    _LOADED[origin.name] = (digest, list(built))
+    return [rid for _, rid in built]

@@ -1,0 +1,195 @@
+"""Python integrators of the user's: the one place where gnibench steps in Python.
+
+Two kinds of ``[[method]]`` (README, "User definitions"):
+
+* ``python``: ``entry = "module:function"`` names ``step(f, t, y, h) -> y_new`` (numpy arrays).
+  gnibench calls it once per step, on the same grid as a compiled fixed-step method (``h``,
+  ``--steps`` / ``--t-end`` with the last step shortened, a sample every K steps). ``steps``
+  counts the calls, ``nfev`` the calls of ``f`` (through a counting wrapper).
+* ``python-solver``: ``entry`` names ``solve(f, y0, t_span, t_eval, rtol, atol)``, a whole
+  integration returning the samples at ``t_eval`` (an array of shape (len(t_eval), N), or a
+  dict with ``y`` and optionally ``nfev``, ``steps``, ``status`` ("ok" or a failure) and
+  ``message``). Like an adaptive engine it samples the grid t = k dt_out. ``nfev`` (counted
+  through the wrapper, or as reported) and ``steps`` (as reported, else 0) are known only at the
+  end: the earlier samples carry NaN and 0.
+
+``f(t, y)`` is the problem's compiled vector field (:mod:`gnibench.problems.codegen`), called
+from Python. An exception in the user's code, a wrong shape or a non-finite state ends the cell
+with status ``error`` or ``nonfinite`` and the reason; the samples before it are kept. Both
+kinds are ``Method.kind == "python"``; modifiers, which act on gnibench's compiled field, are
+refused.
+"""
+from __future__ import annotations
+
+import importlib
+import re
+import sys
+import time
+from dataclasses import dataclass
+
+import numpy as np
+from gnibench.methods.engines.base import EngineRun
+from gnibench.methods.external import ExternalMethod
+from gnibench.suite.foundation.errors import UserError
+
+_ENTRIES: dict[tuple[str, str], object] = {}
+
+
+@dataclass(frozen=True)
+class PythonMethod(ExternalMethod):
+    """A user's integrator written in Python (``entry``: ``module:function``)."""
+
+    entry: str = ""
+
+    def check_structure(self, problem, has_modifiers: bool) -> None:
+        if has_modifiers:
+            raise UserError(f"method {self.id} runs in Python (kind python); modifiers (+observer, "
+                            f"+penalty, +projection) act on gnibench's compiled vector field and "
+                            f"apply only to the compiled methods")
+
+    def describe(self) -> dict:
+        d = super().describe()
+        d["properties"].update(external=False, python=True)
+        d["entry"] = self.entry
+        return d
+
+
+def resolve_entry(entry: str, base: str = ""):
+    """The function named ``module:function`` (the module imported as usual, else from ``base``,
+    the directory of the definitions file)."""
+    key = (entry, base)
+    if key in _ENTRIES:
+        return _ENTRIES[key]
+    match = re.fullmatch(r"\s*([A-Za-z_][\w.]*)\s*:\s*([A-Za-z_][\w.]*)\s*", entry)
+    if match is None:
+        raise ValueError(f"bad entry {entry!r}; allowed: 'module:function'")
+    module, name = match.groups()
+    try:
+        mod = importlib.import_module(module)
+    except ModuleNotFoundError:
+        if not base:
+            raise
+        sys.path.insert(0, base)
+        try:
+            mod = importlib.import_module(module)
+        finally:
+            sys.path.remove(base)
+    fn = mod
+    for part in name.split("."):
+        fn = getattr(fn, part)
+    if not callable(fn):
+        raise TypeError(f"{entry} is not callable")
+    _ENTRIES[key] = fn
+    return fn
+
+
+def _field(problem):
+    """f(t, y) -> ndarray from the problem's compiled field, and its call counter."""
+    from gnibench.suite.cell.compiled import problem_kernel
+
+    pk = problem_kernel(problem)
+    base_f, par, n = pk.kernel.base_f, pk.par, problem.record.dim
+    count = [0]
+
+    def f(t, y):
+        count[0] += 1
+        y = np.asarray(y, dtype=float)
+        return np.array(base_f(tuple(float(y[i]) for i in range(n)), par))
+
+    return f, count
+
+
+def _state(value, n: int) -> np.ndarray:
+    y = np.asarray(value, dtype=float)
+    if y.shape != (n,):
+        raise ValueError(f"returned shape {y.shape}; expected ({n},)")
+    return y
+
+
+def stepper(entry: str, base: str):
+    """``run(problem, values, grid) -> EngineRun`` of a ``python`` method."""
+
+    def run(problem, values, grid) -> EngineRun:
+        t0 = time.perf_counter()
+        step = resolve_entry(entry, base)
+        f, count = _field(problem)
+        n = problem.record.dim
+        marks = grid.step
+        rows = len(marks)
+        y = np.array(problem.record.y0(problem.values), dtype=float)
+        out, nfev = np.empty((rows, n)), np.zeros(rows)
+        out[0] = y
+        setup = time.perf_counter() - t0
+        status, reason, done, k = "ok", "", 1, 1
+        t1 = time.perf_counter()
+        for i in range(1, grid.nsteps + 1):
+            h = grid.h if i < grid.nsteps else grid.h_last
+            try:
+                y = _state(step(f, (i - 1) * grid.h, y.copy(), h), n)
+            except Exception as e:  # noqa: BLE001 - the user's code: a status, not a crash
+                status, reason = "error", f"{entry} at step {i}: {type(e).__name__}: {e}"
+                break
+            if not np.all(np.isfinite(y)):
+                status, reason = "nonfinite", f"state overflowed or became NaN at step {i}"
+                break
+            if k < rows and marks[k] == i:
+                out[k], nfev[k] = y, count[0]
+                k += 1
+                done = k
+        seconds = time.perf_counter() - t1
+        info = {"engine": "python", "entry": entry, "steps": "calls of the step function",
+                "nfev": "calls of f"}
+        return EngineRun(y=out[:done], y_full=None, steps=marks[:done].astype(np.int64),
+                         nfev=nfev[:done], status=status, reason=reason, setup_seconds=setup,
+                         seconds=seconds, info=info)
+
+    return run
+
+
+def solver(entry: str, base: str):
+    """``run(problem, values, grid) -> EngineRun`` of a ``python-solver`` method."""
+
+    def run(problem, values, grid) -> EngineRun:
+        t0 = time.perf_counter()
+        solve = resolve_entry(entry, base)
+        f, count = _field(problem)
+        n = problem.record.dim
+        t_eval = np.array(grid.t, dtype=float)
+        y0 = np.array(problem.record.y0(problem.values), dtype=float)
+        setup = time.perf_counter() - t0
+        status, reason, steps, reported = "ok", "", 0, None
+        t1 = time.perf_counter()
+        try:
+            result = solve(f, y0.copy(), (0.0, float(t_eval[-1])), t_eval.copy(),
+                           float(values["rtol"]), float(values["atol"]))
+            if isinstance(result, dict):
+                status = str(result.get("status", "ok"))
+                reason = "" if status == "ok" else str(result.get("message", ""))
+                steps, reported = int(result.get("steps", 0)), result.get("nfev")
+                result = result["y"]
+            y = np.asarray(result, dtype=float)
+            if y.ndim != 2 or y.shape[1] != n or len(y) > len(t_eval):
+                raise ValueError(f"returned samples of shape {y.shape}; expected "
+                                 f"({len(t_eval)}, {n})")
+        except Exception as e:  # noqa: BLE001 - the user's code: a status, not a crash
+            y, status, reason = np.empty((0, n)), "error", f"{entry}: {type(e).__name__}: {e}"
+        seconds = time.perf_counter() - t1
+        bad = ~np.all(np.isfinite(y), axis=1)
+        if bad.any():
+            y, status = y[:int(np.argmax(bad))], "nonfinite"
+            reason = reason or "the solver returned non-finite samples"
+        elif len(y) < len(t_eval) and status == "ok":
+            status, reason = "error", f"the solver returned {len(y)} of {len(t_eval)} samples"
+        if status not in ("ok", "nonfinite", "error", "max_steps", "step_too_small"):
+            status, reason = "error", f"{entry} returned status {status!r}: {reason}"
+        rows = len(y)
+        nfev, counts = np.full(rows, np.nan), np.zeros(rows, dtype=np.int64)
+        if rows:
+            nfev[-1] = float(count[0] if reported is None else reported)
+            counts[-1] = steps
+        info = {"engine": "python", "entry": entry, "steps": "as reported by the solver (last "
+                "sample)", "nfev": "calls of f, or as reported (last sample)"}
+        return EngineRun(y=y, y_full=None, steps=counts, nfev=nfev, status=status, reason=reason,
+                         setup_seconds=setup, seconds=seconds, info=info)
+
+    return run

@@ -1,0 +1,145 @@
+"""The typed cell (suite/cell/cellspec.py): parsed once at the edge, picklable by registry
+references, methods' kind as data, spec structure without hand splitting, refusals of issue 18."""
+from __future__ import annotations
+
+import pickle
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from gnibench.methods import COMPILED, METHODS
+from gnibench.methods.base import KINDS
+from gnibench.suite.cell.cellspec import CellSpec
+from gnibench.suite.cell.solve import solve, solve_cell
+from gnibench.suite.cell.spec import item_id, parse_method, parse_problem, prepare, structure
+from gnibench.suite.cli.main import main
+from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.metrics.cells import make_cell
+from gnibench.suite.runs.experiment import parse_experiment
+
+ROOT = Path(__file__).resolve().parents[1]
+
+EXPERIMENT = """
+name = "typed"
+title = "typed cells"
+reference = "[HLW] I.2"
+t_end = 6.283185307179586
+every = 50
+metrics = ["eta", "growth:of=H"]
+[[cells]]
+problems = ["kepler-2d:e=0.6"]
+methods = ["rk4:h=0.01+observer:on=H/L,theta=2", "heyoka-taylor"]
+"""
+
+
+def test_cell_is_typed_and_pickles_by_registry_reference():
+    cell = parse_experiment(EXPERIMENT, "typed.toml").cells[0]
+    spec = cell.spec
+    assert isinstance(spec, CellSpec)
+    assert spec.problem.record is parse_problem("kepler-2d").record
+    assert spec.method.modifiers[0].values["on"] == ("H", "L")
+    assert [c.metric.id for c in spec.metrics] == ["eta", "growth"]
+    assert spec.dt_out == pytest.approx(2 * np.pi)      # eta: on the grid t = nT
+    back = pickle.loads(pickle.dumps(cell))
+    assert back == cell and back.method == cell.method and back.metrics == cell.metrics
+    assert back.spec.method.base.record is spec.method.base.record      # the registry's record
+    assert back.spec.metrics[1].metric is spec.metrics[1].metric
+    engine = parse_experiment(EXPERIMENT, "typed.toml").cells[1]
+    assert engine.spec.kind == "external" and engine.spec.method.base.values["dt_out"] > 0
+
+
+def test_a_fresh_interpreter_resolves_the_records_it_unpickles(tmp_path):
+    """A spawned worker (Dask) has imported nothing: unpickling imports the registries."""
+    cell = parse_experiment(EXPERIMENT, "typed.toml").cells[0]
+    path = tmp_path / "cell.pickle"
+    path.write_bytes(pickle.dumps(cell))
+    code = ("import pickle, sys; c = pickle.loads(open(sys.argv[1], 'rb').read()); "
+            "print(c.method, c.spec.problem.record.id, c.spec.metrics[0].metric.id)")
+    out = subprocess.run([sys.executable, "-c", code, str(path)], capture_output=True, text=True,
+                         check=True).stdout.split()
+    assert out == [cell.method, "kepler-2d", "eta"]
+
+
+def test_a_record_made_on_the_fly_pickles_by_value():
+    from dataclasses import replace
+
+    rec = replace(METHODS["rk4"], id="rk4-copy")
+    assert pickle.loads(pickle.dumps(rec.describe())) == rec.describe()
+    with pytest.raises((pickle.PicklingError, AttributeError, TypeError)):
+        pickle.dumps(rec)              # it holds a local function: by value, as a dataclass would
+
+
+def test_text_and_typed_values_give_the_same_cell_and_samples():
+    a = make_cell("pendulum:p0=1.4,q0=0", "stormer-verlet:h=0.1", steps=50, every=10)
+    p, m = prepare("pendulum:p0=1.4,q0=0", "stormer-verlet:h=0.1")
+    b = make_cell(p, m, steps=50, every=10)
+    assert a == b and a.problem_text == "pendulum:p0=1.4,q0=0"
+    t1 = solve("pendulum:p0=1.4,q0=0", "stormer-verlet:h=0.1", steps=50, every=10)
+    t2 = solve(p, m, steps=50, every=10)
+    t3 = solve_cell(a)
+    assert np.array_equal(t1.y, t2.y) and np.array_equal(t1.y, t3.y)
+    # a method parsed without the problem is checked against it (modifiers resolved)
+    loose = parse_method("rk4:h=0.01+observer:theta=3")
+    cell = make_cell("double-oscillator", loose, steps=10)
+    assert cell.method.modifiers[0].values["on"] == ("H1", "H2")
+    with pytest.raises(UserError, match="needs a partitioned system"):
+        make_cell("euler-so4", parse_method("symplectic-euler"), steps=10)
+
+
+def test_method_kind_is_data():
+    assert {m.kind for m in METHODS.values()} <= set(KINDS)
+    externals = {k for k, m in METHODS.items() if m.kind == "external"}
+    assert externals == {"heyoka-taylor", "rebound-ias15", "rebound-whfast"}
+    assert set(COMPILED) == set(METHODS) - externals
+    for path in list((ROOT / "suite").rglob("*.py")) + list((ROOT / "methods").rglob("*.py")):
+        assert not re.search(r"getattr\([^)]*[\"']run[\"']", path.read_text()), path
+
+
+def test_no_hand_splitting_of_spec_text_outside_the_spec_module():
+    pattern = re.compile(r"""(partition|split)\(["'][:+]["']""")
+    for top in ("suite", "methods", "problems", "reports"):
+        for path in (ROOT / top).rglob("*.py"):
+            if path.name == "spec.py":
+                continue
+            for n, line in enumerate(path.read_text().splitlines(), 1):
+                assert not pattern.search(line), f"{path}:{n}: {line.strip()}"
+
+
+def test_structure_of_spec_texts():
+    s = structure("rk4:h=1e+6+observer:on=H/L,theta=2+projection")
+    assert s.id == "rk4" and s.key == "rk4+observer+projection"
+    assert s.base.given == {"h": "1e+6"} and s.modifier("observer").given["on"] == "H/L"
+    assert s.without("h").text() == "rk4+observer:on=H/L,theta=2+projection"
+    assert item_id("kepler-2d:e=0.6") == "kepler-2d"
+    with pytest.raises(UserError, match="expected key=value"):
+        structure("rk4:h")
+
+
+@pytest.mark.parametrize("args", [
+    ["solve", "kepler-2d", "rk4:h=0.01\n", "--steps", "3"],
+    ["solve", "kepler-2d\n", "rk4:h=0.01", "--steps", "3"],
+    ["solve", "kepler-2d", "rk4:h=0.01+observer:on=H\n", "--steps", "3"],
+    ["solve", "kepler-2d", "rk4:h=0.01", "--steps", "3", "--metrics", "eta\n"],
+    ["solve", "kepler-2d", "rk4:h=0.01", "--steps", "3", "--reference", "exact\n"],
+    ["solve", "kepler-2d", "rk4:h=0.01", "--steps", "3", "--metrics", ","],
+    ["solve", "kepler-2d", "rk4:h=0.01", "--steps", "3", "--metrics", ""],
+    ["solve", "kepler-2d", "rk4:h=0.01", "--steps", "3", "--metrics", "eta,,growth"],
+])
+def test_trailing_newlines_and_empty_metrics_are_refused(args, capsys):
+    assert main(args) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1 and err.startswith("gnibench: error: bad ")
+
+
+def test_cells_table_says_how_each_method_runs(tmp_path):
+    path = tmp_path / "typed.toml"
+    path.write_text(EXPERIMENT.replace('"heyoka-taylor"', '"heyoka-taylor:tol=1e-12"'))
+    assert main(["run", str(path), "-o", str(tmp_path / "out"), "-j", "1", "--no-report"]) == 0
+    cells = pd.read_parquet(tmp_path / "out" / "cells.parquet")
+    assert list(cells["method_kind"]) == ["compiled", "external"]
+    assert list(cells.columns[:7]) == ["cell", "group", "label", "problem", "method",
+                                       "method_kind", "h"]
