@@ -142,7 +142,7 @@ def _cost(c: league.Cost, fmt: str, scale: float = 1.0) -> str:
     return f"{value} (cell {c.cells[0]})"
 
 
-def experiment_page(res, img_dir: Path, slug: str, thresholds, jobs: list) -> dict:
+def experiment_page(res, img_dir: Path, slug: str, thresholds, jobs) -> dict:
     """The content of one experiment's page; the drawing of its figures (into ``img_dir``) is
     appended to ``jobs``."""
     meta, cells = res.meta, res.cells

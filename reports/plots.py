@@ -148,7 +148,7 @@ def _grid(panels: list[Panel], cols: int = 1, right: float = 0.56) -> Plot:
 
 
 def time_figures(problem: str, cells, samples, out_dir: Path, prefix: str, slug: str,
-                 jobs: list, by_cell: dict | None = None, memo: dict | None = None) -> list[Figure]:
+                 jobs, by_cell: dict | None = None, memo: dict | None = None) -> list[Figure]:
     """The time-series figures of one problem (see the module docstring); their drawing is
     appended to ``jobs``. ``by_cell``: :func:`trajectories` of the samples (if already split);
     ``memo``: fitted growth exponents, shared with the table of cells."""

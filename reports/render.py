@@ -6,9 +6,10 @@ cache of drawn images (:mod:`gnibench.reports.drawing`).
 
 Lighter than the defaults where it costs nothing visible: tick labels of log axes are plain
 Unicode text (``10⁻⁵``, ``2×10⁻³``) instead of mathtext (whose parser costs tens of ms per
-distinct label and figure), no minor ticks on log axes (thousands of tick objects per page), fixed
-margins instead of ``tight_layout`` (which measures every label), titles at the top of their axes
-without measuring the tick labels (there are none above the axes).
+distinct label and figure), unhinted glyphs, no minor ticks on log axes (thousands of tick objects
+per page), fixed margins instead of ``tight_layout`` (which measures every label), titles at the
+top of their axes without measuring the tick labels (there are none above the axes), an RGB PNG
+at zlib level 3.
 """
 from __future__ import annotations
 
@@ -22,6 +23,9 @@ from pathlib import Path
 import numpy as np
 
 DPI = 100
+#: glyphs unhinted: a fifth of the drawing is FreeType's TrueType hinting interpreter, and at
+#: 100 dpi unhinted text is as legible (slightly softer)
+RC = {"text.hinting": "no_hinting"}
 
 
 @dataclass
@@ -110,7 +114,7 @@ def renderer_version() -> str:
         from importlib.metadata import version
 
         _VERSION.append(hashlib.sha256(Path(__file__).read_bytes()).hexdigest()[:16]
-                        + f"-mpl{version('matplotlib')}-dpi{DPI}")
+                        + f"-mpl{version('matplotlib')}-pillow{version('pillow')}")
     return _VERSION[0]
 
 
@@ -196,11 +200,18 @@ def _panel(fig, ax, panel: Panel) -> None:
 
 def render(plot: Plot, path: Path) -> None:
     """Draw ``plot`` into the PNG file ``path``."""
+    import matplotlib
+
+    with matplotlib.rc_context(RC):
+        _render(plot, path)
+
+
+def _render(plot: Plot, path: Path) -> None:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=plot.size)
-    FigureCanvasAgg(fig)
+    fig = Figure(figsize=plot.size, dpi=DPI)
+    canvas = FigureCanvasAgg(fig)
     axes = fig.subplots(plot.rows, plot.cols, squeeze=False).ravel()
     fig.subplots_adjust(**plot.adjust)
     for ax in axes[len(plot.panels):]:
@@ -220,4 +231,19 @@ def render(plot: Plot, path: Path) -> None:
             fig.legend(handles, labels, **plot.legend)
     for ax in fig.axes:
         _ticks(ax)
-    fig.savefig(path, dpi=DPI)
+    canvas.draw()
+    _write_png(canvas, path)
+
+
+def _write_png(canvas, path: Path) -> None:
+    """The canvas as an RGB PNG (the figure is opaque: the alpha channel savefig writes is 255
+    everywhere) at zlib level 3: a fifth smaller and 40 % faster to encode than savefig's RGBA at
+    level 6 (the encoding is a sixth of a figure's drawing)."""
+    from matplotlib import __version__
+    from PIL import Image, PngImagePlugin
+
+    rgba = Image.frombuffer("RGBA", canvas.get_width_height(), canvas.buffer_rgba(), "raw",
+                            "RGBA", 0, 1)
+    info = PngImagePlugin.PngInfo()
+    info.add_text("Software", f"Matplotlib version{__version__}, https://matplotlib.org/")
+    rgba.convert("RGB").save(path, format="png", pnginfo=info, dpi=(DPI, DPI), compress_level=3)

@@ -24,7 +24,7 @@ import time
 from pathlib import Path
 from urllib.parse import quote
 
-from gnibench.reports.drawing import draw, early_drawers
+from gnibench.reports.drawing import Figures, early_drawers
 from gnibench.reports.league import DEFAULT_THRESHOLDS
 from gnibench.reports.markdown import code, escape
 from gnibench.reports.pages import experiment_page, index_entry
@@ -140,9 +140,9 @@ def natural_key(name: str) -> tuple:
                  for p in re.split(r"(\d+)", str(name)) if p)
 
 
-def _page(res, img_dir: Path, thresholds, jobs: list) -> dict:
-    """One experiment's page; the drawing of its plots (into ``img_dir``) is appended to
-    ``jobs``."""
+def _page(res, img_dir: Path, thresholds, jobs) -> dict:
+    """One experiment's page; its figures (to be drawn into ``img_dir``) are appended to
+    ``jobs`` (a :class:`~gnibench.reports.drawing.Figures`)."""
     import numpy as np
 
     with np.errstate(all="ignore"):
@@ -154,21 +154,23 @@ def _page(res, img_dir: Path, thresholds, jobs: list) -> dict:
 
 
 def build_site(dirs: list[Path], site: Path, thresholds=DEFAULT_THRESHOLDS,
-               benchmarks: Path | None = None, log=None) -> Path:
+               benchmarks: Path | None = None, log=None, drawers=None) -> Path:
     """Write the site for the results directories ``dirs`` into ``site``; return index.html.
 
     ``thresholds``: the accuracies ε of the league tables. ``benchmarks``: a benchmark storage
     directory (pytest-benchmark layout, ``<machine>/NNNN_<commit>.json``) for the timing page.
+    ``drawers``: a :class:`~gnibench.reports.drawing.Drawers` started earlier by the caller (who
+    closes it), e.g. before the run whose results are reported; default: one of this call's.
     Diverged cells (inf, overflow on log axes) are drawn as far as they are finite, silently.
     """
     import numpy as np
 
     with np.errstate(all="ignore"):
-        return _build_site(dirs, site, thresholds, benchmarks, log)
+        return _build_site(dirs, site, thresholds, benchmarks, log, drawers)
 
 
 def _build_site(dirs: list[Path], site: Path, thresholds, benchmarks: Path | None,
-                log) -> Path:
+                log, given) -> Path:
     from gnibench.reports.timing import timing_page
 
     found, ledgers = find_results(dirs)
@@ -179,11 +181,14 @@ def _build_site(dirs: list[Path], site: Path, thresholds, benchmarks: Path | Non
     html, md = _environments()
     taken: set[str] = set()
     dirs = [img / _unique(res.name, taken) for res in found]
-    with early_drawers([(res.dir, d) for res, d in zip(found, dirs)]) as drawers:
-        jobs: list = []          # the plots of every page, drawn together (reports/drawing.py)
-        pages = [_page(res, d, thresholds, jobs) for res, d in zip(found, dirs)]
-        timing = timing_page(benchmarks, img / "timing", "timing", jobs) if benchmarks else None
-        draw(jobs, dirs + ([img / "timing"] if benchmarks else []), drawers)
+    with contextlib.nullcontext(given) if given is not None else \
+            early_drawers([(res.dir, d) for res, d in zip(found, dirs)]) as drawers:
+        # each figure is drawn (or reused) as soon as its page describes it: reports/drawing.py
+        figures = Figures(drawers, dirs + ([img / "timing"] if benchmarks else []))
+        pages = [_page(res, d, thresholds, figures) for res, d in zip(found, dirs)]
+        timing = timing_page(benchmarks, img / "timing", "timing", figures) if benchmarks \
+            else None
+        figures.finish()
     if log is not None:
         for res in found:
             print(f"gnibench: report: {res.name} ({len(res.cells)} cells)", file=log, flush=True)

@@ -44,9 +44,9 @@ def history(storage: Path) -> list[dict]:
     return rows
 
 
-def timing_page(storage: Path, out_dir: Path, slug: str, jobs: list | None = None) -> dict:
-    """The content of the timing page; the drawing of its figures (into ``out_dir``) is appended
-    to ``jobs`` (None: they are drawn now)."""
+def timing_page(storage: Path, out_dir: Path, slug: str, jobs=None) -> dict:
+    """The content of the timing page; its figures (to be drawn into ``out_dir``) are appended
+    to ``jobs`` (a list or :class:`~gnibench.reports.drawing.Figures`; None: drawn now)."""
     if jobs is None:
         from gnibench.reports.drawing import draw
 

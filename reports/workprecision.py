@@ -46,7 +46,7 @@ def no_nfev(cells) -> list[str]:
 
 
 def wp_figures(problem: str, cells, wall_by_cell: dict[int, float], out_dir: Path, prefix: str,
-               slug: str, jobs: list) -> list[Figure]:
+               slug: str, jobs) -> list[Figure]:
     """The work-precision figures of one problem's cells (with family columns); their drawing is
     appended to ``jobs``."""
     fams = list(dict.fromkeys(cells["family"]))

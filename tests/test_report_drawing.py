@@ -10,7 +10,7 @@ import re
 import numpy as np
 import pytest
 from gnibench.reports import drawing
-from gnibench.reports.drawing import MANIFEST, Job, draw, likely_to_draw
+from gnibench.reports.drawing import MANIFEST, Drawers, Job, draw, likely_to_draw
 from gnibench.reports.render import Panel, Plot, Series, plain_label, plot_key
 from gnibench.reports.site import build_site
 from support_reports import make_results
@@ -138,3 +138,14 @@ def test_rebuilt_site_draws_nothing_and_says_the_same(tmp_path, monkeypatch):
     build_site([results], site)
     assert {p.name: p.stat().st_mtime_ns for p in pngs} == stamps
     assert page() == html
+
+
+def test_a_failing_figure_is_an_error_of_the_drawing_process(tmp_path):
+    bad = small_plot()
+    bad.panels[0].series[0].style["no_such_property"] = 1
+    drawers = Drawers().start(2)
+    with drawers, pytest.raises(RuntimeError, match="no_such_property"):
+        drawers.submit(Job(small_plot(), tmp_path / "good.png"))
+        drawers.submit(Job(bad, tmp_path / "bad.png"))
+        drawers.wait()
+    assert (tmp_path / "good.png").is_file() and drawers.process is None
