@@ -221,17 +221,19 @@ def _list(a) -> int:
 
 
 def _run(a) -> int:
+    from gnibench.reports.drawing import Drawers
     from gnibench.reports.markdown import render_summary
     from gnibench.suite.runs.runner import run_experiment
 
-    out = run_experiment(a.experiment, a.output, jobs=a.jobs, executor=a.executor,
-                         scheduler=a.scheduler, fresh=a.fresh, summarize=render_summary,
-                         scale=a.scale)
-    if not a.no_report:
-        from gnibench.reports.site import build_site
+    with Drawers() as drawers:      # the report's drawing process imports matplotlib meanwhile
+        out = run_experiment(a.experiment, a.output, jobs=a.jobs, executor=a.executor,
+                             scheduler=a.scheduler, fresh=a.fresh, summarize=render_summary,
+                             scale=a.scale, started=None if a.no_report else drawers.start)
+        if not a.no_report:
+            from gnibench.reports.site import build_site
 
-        index = build_site([out], out / "report")
-        print(f"gnibench: report: {index}", file=sys.stderr)
+            index = build_site([out], out / "report", drawers=drawers)
+            print(f"gnibench: report: {index}", file=sys.stderr)
     return 0
 
 

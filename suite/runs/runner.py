@@ -54,7 +54,7 @@ FLUSH_RATIO = 10.0
 
 def run_experiment(name_or_path, out_dir=None, *, jobs: int | None = None,
                    executor: str = "local", scheduler: str | None = None, fresh: bool = False,
-                   log=None, summarize=None, scale: str = "paper") -> Path:
+                   log=None, summarize=None, scale: str = "paper", started=None) -> Path:
     """Run an experiment (shipped name or TOML path); return the output directory.
 
     Parameters
@@ -77,9 +77,14 @@ def run_experiment(name_or_path, out_dir=None, *, jobs: int | None = None,
         every consolidation (None: no summary).
     scale:
         ``paper`` (the file's values) or ``quick`` (its ``[scale.quick]`` overrides).
+    started:
+        Called once the experiment and the executor options are valid, before anything is
+        written (the command line starts the report's drawing process there).
     """
     experiment = load_experiment(name_or_path, scale)
     executors.check(executor, jobs, scheduler)
+    if started is not None:
+        started()
     out = Path(out_dir) if out_dir is not None else Path("results") / experiment.name
     run_experiments([experiment], [out], out, jobs=jobs, executor=executor, scheduler=scheduler,
                     fresh=fresh, log=log, summarize=summarize, name=experiment.name)
