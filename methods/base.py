@@ -11,6 +11,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+from gnibench.methods.summation import sum_param
 from gnibench.suite.foundation.errors import UserError
 from gnibench.suite.foundation.params import Param
 
@@ -46,6 +47,9 @@ class Method:
     [HLW] (1.8)). ``symplectic`` means symplectic for Hamiltonian problems in canonical partition.
     ``field_modifiers_refused``, when set, says why the method cannot integrate a field changed by a
     modifier (observer, penalty); the spec parser then refuses such a modifier at validation.
+    ``summation``, when set, offers the option ``sum`` (methods/summation.py) with that default:
+    ``plain`` for the seeds' methods, ``compensated`` for high-accuracy families whose round-off
+    would otherwise dominate their truncation error.
     """
 
     id: str
@@ -63,6 +67,11 @@ class Method:
     field_modifiers_refused: str = ""  # why the method cannot take +observer/+penalty ("" if it can)
     data: Any = None
     aliases: tuple[str, ...] = field(default=())
+    summation: str | None = None     # default of the option sum (plain|compensated); None: none
+
+    def __post_init__(self):
+        if self.summation is not None and all(p.name != "sum" for p in self.params):
+            object.__setattr__(self, "params", self.params + (sum_param(self.summation),))
 
     def check_structure(self, problem, has_modifiers: bool) -> None:
         """Refuse, with a clear error, a problem that lacks the structure this method needs."""

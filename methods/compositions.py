@@ -4,12 +4,15 @@
 γ = (x1, x0, x1), x1 = 1/(2 − 2^(1/3)), x0 = −2^(1/3) x1. Orders 6 and 8: Yoshida's solutions A
 (6th order, 7 stages) and D (8th order, 15 stages), given by him to 15 digits, composed as
 w_m … w_1 w_0 w_1 … w_m with w_0 = 1 − 2 Σ w_i. Every stage reuses the partitioned kernels of
-methods/partitioned.py (explicit for separable problems, Newton otherwise).
+methods/partitioned.py (explicit for separable problems, Newton otherwise); under
+``sum=compensated`` every stage's block updates add their increments with the carried rounding
+error (``partitioned.compose``, methods/summation.py). Adding a composition: its γ here and one
+line in :mod:`methods` (``summation="compensated"`` makes that its default).
 """
 from __future__ import annotations
 
 from gnibench.methods.base import H_PARAM, NEWTON_PARAMS, Method
-from gnibench.methods.partitioned import _block
+from gnibench.methods.partitioned import _block, compose
 
 
 def _symmetric(w):
@@ -32,22 +35,19 @@ def _generate(gammas):
     def generate(ctx) -> str:
         src_u, ws_u = _block(ctx, "u")
         src_v, ws_v = _block(ctx, "v")
-        lines = ["\n@njit(cache=True)\ndef step(y, h, par, ws):", "    nf = 0.0", "    nj = 0.0"]
-        for g in gammas:
-            for block, w in (("u", 0), ("v", 1)):
-                lines += [f"    y, a, b, s = pstep_{block}(y, {0.5 * g!r} * h, par, ws[{w}])",
-                          "    nf += a", "    nj += b", "    if s != STATUS_OK:", "        return y, nf, nj, s"]
-        lines.append("    return y, nf, nj, STATUS_OK")
+        blocks = [(block, repr(0.5 * g), w) for g in gammas for block, w in (("u", 0), ("v", 1))]
         return (src_u + src_v + f"\n@njit(cache=True)\ndef make_ws():\n    return ({ws_u}, {ws_v})\n"
-                + "\n".join(lines) + "\n")
+                + compose("step", blocks))
     return generate
 
 
-def composition(id, gammas, order, doc):
-    return Method(id=id, family="composition", order=order, reference="[B] §5; Yoshida (1990)",
+def composition(id, gammas, order, doc, summation="plain", reference="[B] §5; Yoshida (1990)"):
+    """A symmetric composition of Störmer-Verlet with coefficients ``gammas``; ``summation``: the
+    default of its option ``sum``."""
+    return Method(id=id, family="composition", order=order, reference=reference,
                   doc=doc, generate=_generate(gammas), params=(H_PARAM,) + NEWTON_PARAMS,
                   symplectic=True, symmetric=True, needs=("partition",), implicit=True,
-                  explicit_when="separable", data=gammas)
+                  explicit_when="separable", data=gammas, summation=summation)
 
 
 yoshida4 = composition("yoshida4", YOSHIDA4, 4, "Yoshida's 4th-order triple jump of Störmer-Verlet")

@@ -2,7 +2,8 @@
 
 Stages are solved by full Newton with the field's Jacobian to round-off (methods/kernels/irk.py).
 A step that does not converge in ``newton_maxit`` iterations ends the run with status
-``newton_failed``.
+``newton_failed``. ``sum=compensated`` adds the increment Σ d_j Z_j with the carried rounding
+error (methods/summation.py).
 """
 from __future__ import annotations
 
@@ -50,15 +51,16 @@ def generate_irk(tab: Tableau):
                   "A = (" + ", ".join("(" + ", ".join(lit(x) for x in row) + ",)"
                                       for row in tab.a) + ",)",
                   "D = (" + ", ".join(lit(x) for x in d) + ",)"]
-        return "\n" + "\n".join(consts) + "\n" + template(irk.make_ws) + template(irk.step)
+        return ("\n" + "\n".join(consts) + "\n" + template(irk.make_ws) + template(irk.stages)
+                + template(irk.step) + template(irk.step_sum))
 
     return generate
 
 
-def irk_method(id, tab, reference, doc, **props):
+def irk_method(id, tab, reference, doc, summation="plain", **props):
     return Method(id=id, family="implicit-rk", order=tab.order, reference=reference, doc=doc,
                   generate=generate_irk(tab), data=tab, implicit=True,
-                  params=(H_PARAM,) + NEWTON_PARAMS, **props)
+                  params=(H_PARAM,) + NEWTON_PARAMS, summation=summation, **props)
 
 
 implicit_euler = irk_method("implicit-euler", IMPLICIT_EULER, "[HLW] (1.6)", "implicit Euler method")

@@ -2,7 +2,9 @@
 
 Stage increments Z_i = Y_i - y solve Z_i = h sum_j a_ij f(y + Z_j); the new point is
 y1 = y + sum_j d_j Z_j with d = b^T A^{-1} (no extra f-evaluation). Newton uses the Jacobian of f
-at the current iterate (full Newton), so it converges quadratically to round-off.
+at the current iterate (full Newton), so it converges quadratically to round-off. Under
+``sum=compensated`` (``step_sum``) the increment Σ_j d_j Z_j is added to y with the carried
+rounding error e (methods/summation.py).
 """
 from __future__ import annotations
 
@@ -15,6 +17,7 @@ from gnibench.methods.kernels.free import (
     D,
     N,
     S,
+    carry_add,
     f,
     fjac,
     lu_solve,
@@ -30,8 +33,9 @@ def make_ws():
             np.empty((N, N)), np.empty(S * N, dtype=np.int64), np.empty(N))
 
 
-def step(y, h, par, ws):
-    Z, F, M, r, J, piv, out = ws
+def stages(y, h, par, ws):
+    """Newton for the stage increments Z (in ws[0]): (nfev, njev, status)."""
+    Z, F, M, r, J, piv, _ = ws
     scale = 1.0
     for i in range(N):
         scale = max(scale, abs(y[i]))
@@ -42,7 +46,7 @@ def step(y, h, par, ws):
     prev = np.inf
     for it in range(NEWTON_MAXIT + 1):
         if it == NEWTON_MAXIT:
-            return y, nfev, njev, STATUS_NEWTON_FAILED
+            return nfev, njev, STATUS_NEWTON_FAILED
         for j in range(S):
             Yj = shifted(y, Z, j)
             store(f(Yj, par), F, j)
@@ -64,20 +68,42 @@ def step(y, h, par, ws):
                     acc += A[a][j] * F[j, i]
                 r[a * N + i] = h * acc - Z[a, i]
         if not lu_solve(M, r, S * N, piv):
-            return y, nfev, njev, STATUS_NEWTON_FAILED
+            return nfev, njev, STATUS_NEWTON_FAILED
         dnorm = 0.0
         for a in range(S):
             for i in range(N):
                 Z[a, i] += r[a * N + i]
                 dnorm = max(dnorm, abs(r[a * N + i]))
         if not dnorm < np.inf:
-            return y, nfev, njev, STATUS_NEWTON_FAILED
+            return nfev, njev, STATUS_NEWTON_FAILED
         if newton_done(dnorm, prev, scale):
             break
         prev = dnorm
+    return nfev, njev, STATUS_OK
+
+
+def step(y, h, par, ws):
+    nfev, njev, s = stages(y, h, par, ws)
+    if s != STATUS_OK:
+        return y, nfev, njev, s
+    Z, out = ws[0], ws[6]
     for i in range(N):
         acc = 0.0
         for j in range(S):
             acc += D[j] * Z[j, i]
         out[i] = y[i] + acc
     return to_tuple(out), nfev, njev, STATUS_OK
+
+
+def step_sum(y, e, h, par, ws):
+    nfev, njev, s = stages(y, h, par, ws)
+    if s != STATUS_OK:
+        return y, e, nfev, njev, s
+    Z, out = ws[0], ws[6]
+    for i in range(N):
+        acc = 0.0
+        for j in range(S):
+            acc += D[j] * Z[j, i]
+        out[i] = acc
+    y1, e1 = carry_add(y, e, to_tuple(out))
+    return y1, e1, nfev, njev, STATUS_OK
