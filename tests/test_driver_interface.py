@@ -106,3 +106,14 @@ def test_reverse_is_refused_where_it_does_not_apply(spec, kw):
     problem, method = prepare("kepler-2d", spec)
     with pytest.raises(UserError, match="reverse"):
         integrate(problem, method, reverse=True, **kw)
+
+
+def test_a_moved_point_is_not_given_the_fsal_stage_of_the_unmoved_one():
+    """dopri5's last stage is f(y1): reused as the next first stage only when neither +projection
+    nor post_step moved y1; here every accepted step is projected, so every one costs f(y_n+1) on
+    top of HINIT's 2 and the 6 new stages per attempt."""
+    traj = integrate(*prepare("kepler-2d", "dopri5:rtol=1e-8,atol=1e-8+projection:on=H/L"),
+                     t_end=20.0)
+    plain = integrate(*prepare("kepler-2d", "dopri5:rtol=1e-8,atol=1e-8"), t_end=20.0)
+    for tr, extra in ((traj, traj.steps[-1]), (plain, 0)):
+        assert tr.nfev[-1] == 2 + 6 * (tr.steps[-1] + tr.rejected[-1]) + extra

@@ -239,7 +239,7 @@ def integrate_adaptive(y_io, st, par, t_end, h0, hmax, rtol, atol, every, dt_out
             t = t + h
         y2 = post_step(y1p, par)
         fy_old = fy
-        if FSAL and y2 == y1p:
+        if FSAL and y2 == y1:            # f1 = f(y1): stale once y1 is moved
             fy = f1
         else:
             fy = f(y2, par)
