@@ -5,6 +5,8 @@ A step that does not converge in ``newton_maxit`` iterations ends the run with s
 ``newton_failed``. With ``fixed_point = K`` the stages are solved instead by at most K fixed-point
 iterations (no Jacobian); a step that has not converged then is accepted with its last iterate and
 counted in ``njev`` ([HLW] Fig 2.4's implicit Euler, see methods/kernels/irk.py).
+``sum=compensated`` adds the increment Σ d_j Z_j with the carried rounding
+error (methods/summation.py).
 """
 from __future__ import annotations
 
@@ -56,10 +58,12 @@ def generate_irk(tab: Tableau):
                   "D = (" + ", ".join(lit(x) for x in d) + ",)"]
         k = int(ctx.values.get("fixed_point", 0))
         if k:                                   # fixed-point iteration instead of Newton
-            return ("\n" + "\n".join(consts + [f"FIXED_POINT = {k}"]) + "\n"
-                    + template(irk.make_ws)
-                    + template(irk.step_fixed_point, {"step_fixed_point": "step"}))
-        return "\n" + "\n".join(consts) + "\n" + template(irk.make_ws) + template(irk.step)
+            consts.append(f"FIXED_POINT = {k}")
+            solver = template(irk.stages_fixed_point, {"stages_fixed_point": "stages"})
+        else:
+            solver = template(irk.stages)
+        return ("\n" + "\n".join(consts) + "\n" + template(irk.make_ws) + solver
+                + template(irk.step) + template(irk.step_sum))
 
     return generate
 
@@ -70,10 +74,11 @@ FIXED_POINT_PARAM = Param(
     kind="int", low=0, high=100000, show_default=False)
 
 
-def irk_method(id, tab, reference, doc, **props):
+def irk_method(id, tab, reference, doc, summation="plain", **props):
     return Method(id=id, family="implicit-rk", order=tab.order, reference=reference, doc=doc,
                   generate=generate_irk(tab), data=tab, implicit=True,
-                  params=(H_PARAM,) + NEWTON_PARAMS + (FIXED_POINT_PARAM,), **props)
+                  params=(H_PARAM,) + NEWTON_PARAMS + (FIXED_POINT_PARAM,), summation=summation,
+                  **props)
 
 
 implicit_euler = irk_method("implicit-euler", IMPLICIT_EULER, "[HLW] (1.6)", "implicit Euler method")
