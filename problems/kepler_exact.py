@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import numpy as np
 
-
 LD = np.longdouble
 PI = LD("3.14159265358979323846264338327950288")
 

@@ -42,7 +42,7 @@ def test_state_slots_are_read_by_name_only():
 
 def test_one_place_builds_a_trajectory():
     builders = [path for path, text in _sources("suite", "methods", "reports")
-                if re.search(r"\bTrajectory\(\s*$|\bTrajectory\(\w+=", text, re.M)]
+                if re.search(r"\bTrajectory\(\s*$|\bTrajectory\(\w+=", text, re.MULTILINE)]
     assert builders == ["suite/cell/drivers.py"]
 
 
