@@ -80,9 +80,9 @@ def load_catalog(text: str | None = None) -> tuple[list[Mutant], dict]:
 
 
 def package_root() -> Path:
-    import gnibench
-
-    return Path(gnibench.__file__).resolve().parent
+    """The installed package's directory (this file is <root>/suite/ledger/mutants.py; importing
+    the package top from here would make an import cycle through the API)."""
+    return Path(__file__).resolve().parents[2]
 
 
 def check(mutant: Mutant, root: Path | None = None) -> str:
