@@ -5,6 +5,7 @@ Bad input gives one line on stderr and exit code 2 (no traceback, nothing writte
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import sys
@@ -231,6 +232,15 @@ def _list(a) -> int:
 
 
 def _run(a) -> int:
+    from gnibench.suite.runs.pool import Zygote
+
+    # first: the pool's workers get ready (numba, pandas) while the experiment is read
+    pooled = a.executor == "local" and a.jobs != 1 and Zygote.available()
+    with Zygote().start() if pooled else contextlib.nullcontext() as zygote:
+        return _run_with(a, zygote)
+
+
+def _run_with(a, zygote) -> int:
     from gnibench.reports.drawing import Drawers
     from gnibench.reports.markdown import render_summary
     from gnibench.suite.runs.runner import run_experiment
@@ -238,7 +248,8 @@ def _run(a) -> int:
     with Drawers() as drawers:      # the report's drawing process imports matplotlib meanwhile
         out = run_experiment(a.experiment, a.output, jobs=a.jobs, executor=a.executor,
                              scheduler=a.scheduler, fresh=a.fresh, summarize=render_summary,
-                             scale=a.scale, started=None if a.no_report else drawers.start)
+                             scale=a.scale, started=None if a.no_report else drawers.start,
+                             zygote=zygote)
         if not a.no_report:
             from gnibench.reports.site import build_site
 

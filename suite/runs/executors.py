@@ -9,26 +9,22 @@ once, into the disk cache, and the other cells, wherever they run, load it. Comp
 kernels run in parallel.
 
 * ``serial`` (``-j 1``): in this process, in cell order.
-* ``local`` (default, ``-j N``, N = the number of cores): a process pool. Workers ignore SIGINT
-  (the parent handles Ctrl-C and stops them) and report the progress of long cells through a
-  queue.
+* ``local`` (default, ``-j N``, N = the number of cores): a pool of forked workers
+  (:mod:`gnibench.suite.runs.pool`), started while the cells are prepared, that keep the kernels
+  they loaded. Workers ignore SIGINT (the parent handles Ctrl-C and stops them) and report the
+  progress of long cells through a queue.
 * ``dask`` (``--executor dask``): a ``distributed.LocalCluster`` of N single-threaded worker
   processes, or the scheduler at ``--scheduler ADDRESS``; the workers must have gnibench installed.
 """
 from __future__ import annotations
 
-import contextlib
 import os
-import queue
-import signal
 from collections.abc import Callable, Iterator
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
 from gnibench.suite.foundation.errors import UserError
-from gnibench.suite.runs.cellwork import CellOutcome, install_reporter, run_cell
+from gnibench.suite.runs.cellwork import CellOutcome, run_cell
 
 EXECUTORS = ("local", "dask")
-POLL_SECONDS = 0.2
 
 Progress = Callable[[int, float], None]
 
@@ -60,85 +56,46 @@ def check(executor: str, jobs: int | None, scheduler: str | None) -> None:
                             "'gnibench[dask]'") from None
 
 
+def start(executor: str, jobs: int | None, cells: int, zygote=None):
+    """The local pool, started now (its workers get ready while the caller prepares the
+    cells; :mod:`gnibench.suite.runs.pool`; ``zygote``: a :class:`~gnibench.suite.runs.pool.Zygote`
+    to fork them), or None where none is needed (serial, Dask, a single cell, no fork)."""
+    jobs = min(jobs or default_jobs(), cells)
+    if executor != "local" or jobs < 2 or not hasattr(os, "fork"):
+        return None
+    from gnibench.suite.runs.pool import Pool
+
+    return Pool(jobs, zygote).start()
+
+
 def run(groups: list[list], executor: str = "local", jobs: int | None = None,
-        scheduler: str | None = None, progress: Progress | None = None) -> Iterator[CellOutcome]:
-    """Run the cells of ``groups`` and yield their outcomes as they finish."""
+        scheduler: str | None = None, progress: Progress | None = None,
+        pool=None) -> Iterator[CellOutcome]:
+    """Run the cells of ``groups`` and yield their outcomes as they finish (``pool``: the local
+    pool of :func:`start`, else one is started here when needed)."""
     jobs = jobs or default_jobs()
+    total = sum(len(g) for g in groups)
     if executor == "dask":
         yield from _dask(groups, jobs, scheduler)
-    elif jobs == 1 or sum(len(g) for g in groups) <= 1:
+    elif total == 0:
+        return
+    elif pool is not None:
+        yield from pool.run(groups, progress)
+    elif jobs == 1 or total <= 1:
         yield from _serial(groups, progress)
     else:
-        yield from _local(groups, jobs, progress)
+        own = start(executor, jobs, total)
+        if own is None:
+            yield from _serial(groups, progress)
+            return
+        with own:
+            yield from own.run(groups, progress)
 
 
 def _serial(groups, progress) -> Iterator[CellOutcome]:
     cells = sorted((c for g in groups for c in g), key=lambda c: c.id)
     for cell in cells:
         yield run_cell(cell, progress)
-
-
-# -- the local process pool ------------------------------------------------------------------
-
-_queue = None
-
-
-def _worker_init(q) -> None:
-    """In each worker: Ctrl-C is the parent's business; progress goes through the queue."""
-    global _queue
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    _queue = q
-    install_reporter(_report)
-
-
-def _report(cell_id: int, fraction: float) -> None:
-    with contextlib.suppress(Exception):          # progress is best effort
-        _queue.put_nowait((cell_id, fraction))
-
-
-def _drain(q, progress) -> None:
-    while True:
-        try:
-            cell_id, fraction = q.get_nowait()
-        except (queue.Empty, OSError, ValueError):
-            return
-        if progress is not None:
-            progress(cell_id, fraction)
-
-
-def _local(groups, jobs, progress) -> Iterator[CellOutcome]:
-    import multiprocessing as mp
-
-    method = "fork" if "fork" in mp.get_all_start_methods() else "spawn"
-    ctx = mp.get_context(method)
-    q = ctx.Queue()
-    pool = ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_worker_init,
-                               initargs=(q,))
-    waiting = {i: list(g[1:]) for i, g in enumerate(groups)}
-    running = {pool.submit(run_cell, g[0]): i for i, g in enumerate(groups) if g}
-    try:
-        while running:
-            done, _ = wait(running, timeout=POLL_SECONDS, return_when=FIRST_COMPLETED)
-            _drain(q, progress)
-            for fut in done:
-                group = running.pop(fut)
-                for cell in waiting.pop(group, []):      # the kernel is compiled: the rest may go
-                    running[pool.submit(run_cell, cell)] = -1
-                yield fut.result()
-    finally:
-        _stop(pool)
-        q.close()
-
-
-def _stop(pool: ProcessPoolExecutor) -> None:
-    """Shut the pool down now: cancel what has not started, stop what runs (Ctrl-C)."""
-    processes = list(getattr(pool, "_processes", {}).values())
-    pool.shutdown(wait=False, cancel_futures=True)
-    for p in processes:
-        if p.is_alive():
-            p.terminate()
-    for p in processes:
-        p.join(timeout=5)
 
 
 # -- Dask -----------------------------------------------------------------------------------

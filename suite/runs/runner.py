@@ -24,9 +24,11 @@ which order the cells ran.
 Resuming: running the same command again reuses every stored cell whose key matches (spec, code
 and versions; :func:`gnibench.suite.runs.store.cell_key`) and computes only the others; ``fresh``
 ignores the store. An experiment's consolidated tables are rewritten after one of its cells
-finishes whenever the time since their last write is at least ``FLUSH_RATIO`` times what that
-write took (so that a run over many experiments, e.g. ``gnibench reproduce all``, does not rewrite
-the tables of the experiments whose cells are not running), at the end, and on Ctrl-C; unfinished cells appear with status ``pending`` and ``complete: false``.
+finishes whenever the time since their last write (or the start) is at least ``FLUSH_SECONDS``
+and ``FLUSH_RATIO`` times what that write took (so that a short run writes its tables once, and a
+run over many experiments, e.g. ``gnibench reproduce all``, does not rewrite the tables of the
+experiments whose cells are not running), at the end, and on Ctrl-C; unfinished cells appear with
+status ``pending`` and ``complete: false``.
 
 A cell that raises (anything but a KeyboardInterrupt) gets status ``error`` with the exception
 type and message as reason, and the run goes on. Bad input never reaches this point: the whole
@@ -34,6 +36,7 @@ experiment and the executor options are validated first and nothing is written w
 """
 from __future__ import annotations
 
+import contextlib
 import sys
 import time
 from pathlib import Path
@@ -48,11 +51,13 @@ from gnibench.suite.runs.progress import RunProgress
 from gnibench.suite.runs.store import Part, Store, cell_key
 
 FLUSH_RATIO = 10.0
+FLUSH_SECONDS = 5.0
 
 
 def run_experiment(name_or_path, out_dir=None, *, jobs: int | None = None,
                    executor: str = "local", scheduler: str | None = None, fresh: bool = False,
-                   log=None, summarize=None, scale: str = "paper", started=None) -> Path:
+                   log=None, summarize=None, scale: str = "paper", started=None,
+                   zygote=None) -> Path:
     """Run an experiment (shipped name or TOML path); return the output directory.
 
     Parameters
@@ -78,6 +83,9 @@ def run_experiment(name_or_path, out_dir=None, *, jobs: int | None = None,
     started:
         Called once the experiment and the executor options are valid, before anything is
         written (the command line starts the report's drawing process there).
+    zygote:
+        A started :class:`~gnibench.suite.runs.pool.Zygote` that forks the local pool's workers
+        (the command line starts one first thing); default: they are forked from this process.
     """
     experiment = load_experiment(name_or_path, scale)
     executors.check(executor, jobs, scheduler)
@@ -85,20 +93,24 @@ def run_experiment(name_or_path, out_dir=None, *, jobs: int | None = None,
         started()
     out = Path(out_dir) if out_dir is not None else Path("results") / experiment.name
     run_experiments([experiment], [out], out, jobs=jobs, executor=executor, scheduler=scheduler,
-                    fresh=fresh, log=log, summarize=summarize, name=experiment.name)
+                    fresh=fresh, log=log, summarize=summarize, name=experiment.name,
+                    zygote=zygote)
     return out
 
 
 def run_experiments(experiments: list[Experiment], outs: list[Path], store_root: Path, *,
                     jobs: int | None = None, executor: str = "local",
                     scheduler: str | None = None, fresh: bool = False, log=None,
-                    summarize=None, name: str = "run") -> list[Path]:
+                    summarize=None, name: str = "run", zygote=None) -> list[Path]:
     """Run several validated experiments over one store: a cell shared by several experiments
     (same key) is computed once; each experiment's tables are consolidated into its own
     directory (``outs``, in order). Executor options must have been checked."""
     log = sys.stderr if log is None else log
     outs = [Path(o) for o in outs]
-    with Store(store_root) as store:
+    # the workers get ready while the store is read and the cells are grouped
+    pool = executors.start(executor, jobs, len({id(c) for e in experiments for c in e.cells}),
+                           zygote)
+    with pool if pool is not None else contextlib.nullcontext(), Store(store_root) as store:
         for out in outs:
             Store.make_output_dir(out)
         writers = [Consolidator(e, store, out, summarize) for e, out in zip(experiments, outs)]
@@ -115,7 +127,7 @@ def run_experiments(experiments: list[Experiment], outs: list[Path], store_root:
         progress = RunProgress(len(unique), len(done), log, name)
         try:
             for outcome in executors.run(_groups(todo), executor, jobs, scheduler,
-                                         progress.cell_progress):
+                                         progress.cell_progress, pool):
                 key = key_of.get(id(outcome.cell)) or cell_key(outcome.cell)
                 store.write(key, _part(outcome), writers[0].empty_samples)
                 done.add(key)
@@ -169,7 +181,8 @@ class Consolidator:
         self.fields_due = any(p.get("fields") for p in figure.get("panels", []))
 
     def due(self) -> bool:
-        return time.perf_counter() - self.last_write >= FLUSH_RATIO * self.write_cost
+        return time.perf_counter() - self.last_write >= max(FLUSH_SECONDS,
+                                                             FLUSH_RATIO * self.write_cost)
 
     def flush(self, done: set) -> None:
         from gnibench.suite.metrics.families import family_columns
