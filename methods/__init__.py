@@ -7,11 +7,13 @@ from gnibench.methods import (
                      external,
                      extrapolation,
                      generating_function,
+                     high_order_rk,
                      implicit_rk,
                      lie_poisson,
                      modifiers,
                      partitioned,
                      projection,
+                     scipy_methods,
 )
 from gnibench.suite.foundation.registries import register
 
@@ -22,6 +24,11 @@ METHODS = {m.id: m for m in (
     embedded_rk.rkf45,
     embedded_rk.dopri5,
     embedded_rk.dop853,
+    high_order_rk.vern6,
+    high_order_rk.vern7,
+    high_order_rk.vern8,
+    high_order_rk.vern9,
+    high_order_rk.feagin10,
     extrapolation.odex,
     implicit_rk.implicit_euler,
     implicit_rk.implicit_midpoint,
@@ -33,11 +40,21 @@ METHODS = {m.id: m for m in (
     compositions.yoshida4,
     compositions.yoshida6,
     compositions.yoshida8,
+    compositions.suzuki4,
+    compositions.mclachlan4,
+    compositions.kahan_li6,
+    compositions.kahan_li8,
     lie_poisson.lie_poisson,
     generating_function.generating_function4,
     external.heyoka_taylor,
     external.rebound_ias15,
     external.rebound_whfast,
+    scipy_methods.scipy_rk45,
+    scipy_methods.scipy_rk23,
+    scipy_methods.scipy_dop853,
+    scipy_methods.scipy_radau,
+    scipy_methods.scipy_bdf,
+    scipy_methods.scipy_lsoda,
 )}
 
 ALIASES = {alias: m.id for m in METHODS.values() for alias in m.aliases}

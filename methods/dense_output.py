@@ -16,48 +16,15 @@ from __future__ import annotations
 from dataclasses import dataclass
 from fractions import Fraction
 
-from gnibench.methods.tableau import lit
+from gnibench.methods import order_conditions as oc
+from gnibench.methods.tableau import lit, require, verdict
 
-# -- order conditions -------------------------------------------------------------------------------
-
-
-def rooted_trees(order: int) -> dict[int, list[tuple]]:
-    """Rooted trees by number of nodes (1, 1, 2, 4, 9, 20, 48, 115, ...); a tree is the sorted
-    tuple of its root's subtrees."""
-    by_size: dict[int, list[tuple]] = {1: [()]}
-
-    def forests(m, lowest):
-        """Multisets of trees with m nodes in all, listed in non-decreasing (size, index) order."""
-        if m == 0:
-            yield ()
-            return
-        for size in range(1, m + 1):
-            for index, tree in enumerate(by_size[size]):
-                if (size, index) < lowest:
-                    continue
-                for rest in forests(m - size, (size, index)):
-                    yield (tree,) + rest
-
-    for n in range(2, order + 1):
-        by_size[n] = list(forests(n - 1, (0, 0)))
-    return by_size
-
-
-def density(tree: tuple) -> int:
-    """γ(t): the number of nodes times the densities of the subtrees."""
-    g = 1 + sum(_nodes(c) for c in tree)
-    for c in tree:
-        g *= density(c)
-    return g
-
-
-def _nodes(tree: tuple) -> int:
-    return 1 + sum(_nodes(c) for c in tree)
+# -- order conditions (trees and densities: methods/order_conditions.py) -------------------------
 
 
 def elementary_weights(a, tree: tuple, memo: dict | None = None) -> list:
-    """Φ_j(t) for every stage j: Φ(leaf) = 1, Φ([t1..tm]) = Π_k A Φ(t_k) componentwise (``memo``
-    keeps A Φ of the subtrees already seen)."""
+    """Φ_j(t) for every stage j, in the entries' own number type (floats for a quick residual):
+    Φ(leaf) = 1, Φ([t1..tm]) = Π_k A Φ(t_k) componentwise (``memo`` keeps A Φ of the subtrees)."""
     memo = {} if memo is None else memo
     s = len(a)
     v = [1] * s
@@ -82,26 +49,50 @@ def _poly_mul(p, q):
 
 @dataclass(frozen=True)
 class DenseOutput:
-    """A pair's continuous extension: the rows d of F3, F4, ... over all stages (the pair's, then
-    the extra ones), and the extra stages (rows of A over every earlier stage, and c)."""
+    """A pair's continuous extension, in one of two forms:
+
+    * Hairer's (DOPRI5, DOP853): the rows ``d`` of F3, F4, ... over all stages (the pair's, then
+      the extra ones); the pair's last stage is f(y1);
+    * polynomial weights (Verner's interpolants): ``b_theta[j]`` = (r_j1, ..., r_jq), the
+      coefficients of θ^1..θ^q in b_j(θ), so u(θ) = y0 + h Σ_j b_j(θ) K_j.
+
+    ``extra_a``/``extra_c``: the extra stages (rows of A over every earlier stage, and c); an extra
+    stage whose row is b is f(y1), which the driver has already (not evaluated again). ``tol``:
+    0 for exact data, else the bound on the order conditions' residuals (decimal data)."""
 
     order: int
-    d: tuple[tuple, ...]
+    d: tuple[tuple, ...] = ()
     extra_a: tuple[tuple, ...] = ()
     extra_c: tuple = ()
     reference: str = ""
+    b_theta: tuple[tuple, ...] = ()
+    tol: float = 0
+
+    @property
+    def polynomial(self) -> bool:
+        return bool(self.b_theta)
+
+    def is_f1(self, i: int, tab) -> bool:
+        """Extra stage i is f(y1): its row is b (and zero beyond the pair's stages)."""
+        row = self.extra_a[i]
+        return (list(row[:tab.stages]) == list(tab.b) and all(x == 0 for x in row[tab.stages:])
+                and self.extra_c[i] == 1)
+
+    def new_stages(self, tab) -> int:
+        """f-evaluations per step beyond the pair's own and f(y1) (DOP853: 3, Vern9: 9)."""
+        return sum(1 for i in range(len(self.extra_a)) if not self.is_f1(i, tab))
 
     @property
     def extra_stages(self) -> int:
-        """f-evaluations per step beyond the pair's own (DOP853: 3), as Hairer counts them."""
+        """Extra rows (stages) of the extension, f(y1) included when it is one of them."""
         return len(self.extra_a)
 
     @property
     def degree(self) -> int:
-        return 3 + len(self.d)
+        return len(self.b_theta[0]) if self.polynomial else 3 + len(self.d)
 
     def stages_a(self, tab) -> list[list]:
-        """A over all stages: the pair's tableau (its last row is b: f(y1)), then the extra rows."""
+        """A over all stages: the pair's tableau, then the extra rows."""
         total = tab.stages + self.extra_stages
         rows = [list(r) + [0] * self.extra_stages for r in tab.a]
         rows += [list(r) + [0] * (total - len(r)) for r in self.extra_a]
@@ -110,6 +101,8 @@ class DenseOutput:
     def weights(self, tab, num=Fraction) -> list[list]:
         """b_j(θ) as polynomial coefficients in θ (index = power), for every stage j, in the number
         type ``num`` (float for float data: exact rationals of doubles are slow to multiply)."""
+        if self.polynomial:
+            return [[num(0)] + [num(x) for x in row] for row in self.b_theta]
         s, total = tab.stages, tab.stages + self.extra_stages
         nest, cur = [], [1]                    # θ, θ(1-θ), θ²(1-θ), θ²(1-θ)², ...
         for r in range(self.degree):
@@ -129,42 +122,41 @@ class DenseOutput:
 
     def residuals(self, tab, order: int) -> list[float]:
         """max over trees t with |t| = k and powers of θ of |Σ_j b_j(θ) Φ_j(t) - θ^k / γ(t)|,
-        for k = 1..order (all zero up to the extension's order)."""
-        floats = any(isinstance(x, float) for row in self.d + self.extra_a for x in row)
-        num = float if floats else Fraction
-        a = [[num(x) for x in row] for row in self.stages_a(tab)]
-        w = self.weights(tab, num)
+        for k = 1..order, in floats (a quick look; :meth:`check` is exact)."""
+        a = [[float(x) for x in row] for row in self.stages_a(tab)]
+        w = self.weights(tab, float)
         out, memo = [], {}
-        for k, trees in sorted(rooted_trees(order).items()):
-            worst = 0
+        for k, trees in enumerate(oc.trees(order), start=1):
+            worst = 0.0
             for tree in trees:
                 phi = elementary_weights(a, tree, memo)
                 for p in range(self.degree + 1):
                     got = sum(w[j][p] * phi[j] for j in range(len(phi)))
-                    worst = max(worst, abs(got - (Fraction(1, density(tree)) if p == k else 0)))
-            out.append(float(worst))
+                    worst = max(worst, abs(got - (1.0 / oc.density(tree) if p == k else 0.0)))
+            out.append(worst)
         return out
 
-    def check(self, tab, tol_float: float = 1e-11) -> None:
-        """Raise ValueError unless the extension fits the tableau and has its stated order.
+    def check(self, tab) -> None:
+        """Raise ValueError unless the extension fits the tableau and has its stated order: every
+        condition Σ_j b_j(θ) Φ_j(t) = θ^|t| / γ(t), |t| <= order, as a polynomial identity in θ,
+        in exact arithmetic (methods/order_conditions.py), within ``tol`` for decimal data.
 
-        Rational data must satisfy the conditions exactly. DOP853's are 30-digit decimals rounded to
-        doubles, with d entries up to 5e2 that cancel: the residuals measure 4.3e-12, hence
-        ``tol_float``; a wrong digit in any coefficient gives residuals > 1e-3."""
+        DOP853's entries are 30-digit decimals rounded to doubles, with d entries up to 5e2 that
+        cancel: its residuals measure 4.3e-12 (tol 1e-11); a wrong digit gives residuals > 1e-3."""
         s, total = tab.stages, tab.stages + self.extra_stages
-        if tab.c[s - 1] != 1 or list(tab.a[s - 1]) != list(tab.b):
-            raise ValueError("dense output needs a tableau whose last stage is f(y1)")
+        if not self.polynomial and (tab.c[s - 1] != 1 or list(tab.a[s - 1]) != list(tab.b)):
+            raise ValueError("Hairer's form of dense output needs a tableau whose last stage is f(y1)")
         if len(self.extra_c) != self.extra_stages:
             raise ValueError("extra stages: one c per row")
-        if any(len(row) != total for row in self.d):
-            raise ValueError("each row of d covers every stage, extra ones included")
+        if (len(self.b_theta) != total if self.polynomial
+                else any(len(row) != total for row in self.d)):
+            raise ValueError("each row of the extension covers every stage, extra ones included")
         for i, (row, c) in enumerate(zip(self.extra_a, self.extra_c)):
-            if len(row) != s + i or abs(sum(row) - c) > 1e-14:
+            if len(row) != s + i or abs(sum(row) - c) > max(self.tol, 1e-14):
                 raise ValueError(f"extra stage {i}: a row over the {s + i} earlier stages summing to c")
-        exact = not any(isinstance(x, float) for row in self.d + self.extra_a for x in row)
-        for k, r in enumerate(self.residuals(tab, self.order), start=1):
-            if r > (0 if exact else tol_float):
-                raise ValueError(f"dense output: order-{k} condition fails (residual {r:.3g})")
+        weights = self.weights(tab, oc.number)             # b_j(θ) stage by stage
+        require(verdict("dense", self.order, self.tol, self.stages_a(tab), weights),
+                f"dense output of order {self.order}")
 
 
 # -- code generation --------------------------------------------------------------------------------
@@ -179,6 +171,8 @@ def generate_dense(dense: DenseOutput, tab, count: int, n: int) -> tuple[str, se
     ``dense_eval(cf, θ)`` is u(θ) (Hairer's CONTD5/CONTD8 nesting); ``dense_slope(cf, θ)`` is
     du/dθ (= h u'(t) in time), for Newton on a section function.
     """
+    if dense.polynomial:
+        return _generate_polynomial(dense, tab, count, n)
     s, comma = tab.stages, "," if n == 1 else ""
     a_all = dense.stages_a(tab)
     arities: set[int] = set()
@@ -227,4 +221,75 @@ def generate_dense(dense: DenseOutput, tab, count: int, n: int) -> tuple[str, se
             lines += [f"    v = c{r + 1}[{i}] + s", f"    ds = {sign}v + {w} * ds", f"    s = {w} * v"]
         lines.append(f"    du{i} = ds")
     lines.append("    return " + tup(f"du{i}" for i in range(n)))
+    return "\n".join(lines) + "\n", arities
+
+
+def _quotients(dense: DenseOutput, tab) -> list[list]:
+    """q_j(θ) with b_j(θ) = θ b_j + θ (θ - 1) q_j(θ) (b_j = 0 beyond the pair's stages), by exact
+    synthetic division; the remainder b_j(1) - b_j is 0 (within ``tol`` for decimal data)."""
+    out = []
+    for j, row in enumerate(dense.b_theta):
+        d = [oc.number(x) for x in row]                 # (b_j(θ) - θ b_j) / θ: coefficients of θ^0..
+        d[0] = d[0] - (tab.b[j] if j < tab.stages else 0)
+        m = len(d) - 1
+        q = [0] * m
+        q[m - 1] = d[m]
+        for k in range(m - 1, 0, -1):
+            q[k - 1] = d[k] + q[k]
+        remainder = d[0] + q[0]
+        if abs(float(remainder)) > dense.tol * 1e6:            # 0 for exact data
+            raise ValueError(f"interpolant weight of stage {j + 1}: b_j(1) differs from b_j by "
+                             f"{float(remainder):.3g}")
+        out.append(q)
+    return out
+
+
+def _generate_polynomial(dense: DenseOutput, tab, count: int, n: int) -> tuple[str, set[int]]:
+    """The same three functions for polynomial weights, in the form
+    u(θ) = y0 + θ (y1 - y0) + θ (θ - 1) Σ_k θ^k G_k,  G_k = h Σ_j q_jk K_j  (:func:`_quotients`),
+    so that u(1) = y1 to round-off whatever the size of Verner's weights (Vern6's reach 1.2e5 and
+    cancel to b_j: summed at θ = 1 in doubles they miss y1 by 8e-13 per step)."""
+    s, comma = tab.stages, "," if n == 1 else ""
+    a_all = dense.stages_a(tab)
+    arities: set[int] = set()
+    unpack = ", ".join(f"k{j}" for j in range(count)) + ("," if count == 1 else "")
+    lines = ["\n@njit(cache=True)\ndef dense_from_stages(y, y1, h, par, ks, f1):", f"    {unpack} = ks"]
+    if count < s:
+        lines.append(f"    k{s - 1} = f1")                  # an FSAL pair's last stage
+    for i in range(s, s + dense.extra_stages):
+        if dense.is_f1(i - s, tab):
+            lines.append(f"    k{i} = f1")
+            continue
+        terms = [(a_all[i][j], j) for j in range(i) if a_all[i][j] != 0]
+        arities.add(len(terms))
+        args = ", ".join(f"{lit(c)}, k{j}" for c, j in terms)
+        lines.append(f"    k{i} = f(erk_lc{len(terms)}(y, h, {args}), par)")
+
+    def tup(items):
+        return "(" + ", ".join(items) + comma + ")"
+
+    q = _quotients(dense, tab)
+    m = len(q[0])                                       # G_0 .. G_{m-1}
+    lines.append("    dy = " + tup(f"y1[{i}] - y[{i}]" for i in range(n)))
+    for k in range(m):
+        terms = [(row[k], j) for j, row in enumerate(q) if row[k] != 0]
+        lines.append(f"    g{k} = " + tup("h * (" + " + ".join(f"{lit(c)} * k{j}[{i}]" for c, j in terms)
+                                           + ")" for i in range(n)))
+    names = ["y", "dy"] + [f"g{k}" for k in range(m)]
+    lines.append(f"    return ({', '.join(names)})")
+    cf = ", ".join(names)
+
+    def horner(i, k=0):                                 # S(θ) = Σ θ^k G_k
+        return f"g{k}[{i}]" if k == m - 1 else f"g{k}[{i}] + theta * ({horner(i, k + 1)})"
+
+    def dhorner(i, k=1):                                # S'(θ)
+        return f"{k}.0 * g{k}[{i}]" if k == m - 1 else f"{k}.0 * g{k}[{i}] + theta * ({dhorner(i, k + 1)})"
+
+    lines += ["\n@njit(cache=True)\ndef dense_eval(cf, theta):", f"    {cf} = cf",
+              "    return " + tup(f"y[{i}] + theta * (dy[{i}] + (theta - 1.0) * ({horner(i)}))"
+                                  for i in range(n))]
+    slope = (lambda i: f"dy[{i}] + (2.0 * theta - 1.0) * ({horner(i)}) + theta * (theta - 1.0) * "
+             f"({dhorner(i)})") if m > 1 else (lambda i: f"dy[{i}] + (2.0 * theta - 1.0) * g0[{i}]")
+    lines += ["\n@njit(cache=True)\ndef dense_slope(cf, theta):", f"    {cf} = cf",
+              "    return " + tup(slope(i) for i in range(n))]
     return "\n".join(lines) + "\n", arities

@@ -13,12 +13,13 @@ from dataclasses import dataclass
 from fractions import Fraction as Fr
 
 import gnibench.methods.dop853_coefficients as dop853_data
+from gnibench.methods import order_conditions as oc
 from gnibench.methods.base import Method, adaptive_params
 from gnibench.methods.dense_output import DenseOutput, generate_dense
 from gnibench.methods.events import grid_functions, root_functions, variant
 from gnibench.methods.explicit_rk import combination, generate_erk, helpers, stage_lines
 from gnibench.methods.kernels import adaptive, events
-from gnibench.methods.tableau import Tableau, lit, tableau
+from gnibench.methods.tableau import Tableau, lit, require, tableau, verdict
 from gnibench.suite.foundation.params import Param
 from gnibench.suite.foundation.templates import template
 
@@ -37,10 +38,16 @@ class Pair:
     fac2: float = 10.0          # new h / old h <= fac2
     e3: tuple | None = None     # DOP853's 3rd-order weights (its combined estimate)
     dense: DenseOutput | None = None   # continuous extension (Hairer's CONTD5 / CONTD8)
+    embedded_order: int = 0     # order of b̂ = b - e, checked when given
+    tol: float = 0              # tolerance of that check (decimal or double data)
 
     def __post_init__(self):
         if abs(sum(self.e)) > 1e-14:
             raise ValueError("error weights must sum to 0 (b and b̂ both sum to 1)")
+        if self.embedded_order:
+            bhat = [x - oc.number(e) for x, e in zip(self.tab.b, self.e)]
+            require(verdict("tableau", self.embedded_order, self.tol, self.tab.a, bhat, None),
+                    f"embedded weights b - e of order {self.embedded_order}")
         if self.fsal and len(self.e) != self.tab.stages:
             raise ValueError("error weights must cover every stage")
         if self.dense is not None:
@@ -76,7 +83,7 @@ DOPRI5 = Pair(
         [0, "1/5", "3/10", "4/5", "8/9", 1, 1], order=5),
     e=tuple(Fr(x) for x in ("71/57600", "0", "-71/16695", "71/1920", "-17253/339200", "22/525",
                             "-1/40")),
-    iord=5, expo=0.2 - 0.04 * 0.75, beta=0.04, fac1=0.2, fac2=10.0,
+    iord=5, expo=0.2 - 0.04 * 0.75, beta=0.04, fac1=0.2, fac2=10.0, embedded_order=4,
     # Hairer's DOPRI5 (CONTD5, its D1..D7 over the stages k1..k6, f(y1)); HNW I §II.6
     dense=DenseOutput(order=4, d=(tuple(Fr(x) for x in (
         "-12715105075/11282082432", "0", "87487479700/32700410799", "-10690763975/1880347072",
@@ -93,7 +100,7 @@ RKF45 = Pair(
          ["439/216", -8, "3680/513", "-845/4104", 0, 0],
          ["-8/27", 2, "-3544/2565", "1859/4104", "-11/40", 0]],
         _RKF_B4, [0, "1/4", "3/8", "12/13", 1, "1/2"], order=4),
-    e=tuple(Fr(a) - Fr(b) for a, b in zip(_RKF_B4, _RKF_B5)), iord=5, expo=0.2)
+    e=tuple(Fr(a) - Fr(b) for a, b in zip(_RKF_B4, _RKF_B5)), iord=5, expo=0.2, embedded_order=5)
 
 # Kutta-Merson 4("5"): estimate (h/30)(2k1 - 9k3 + 8k4 - k5)  ([B] §6 and §8 use Merson's method).
 MERSON = Pair(
@@ -101,22 +108,22 @@ MERSON = Pair(
         [[0] * 5, ["1/3"] + [0] * 4, ["1/6", "1/6", 0, 0, 0], ["1/8", 0, "3/8", 0, 0],
          ["1/2", 0, "-3/2", 2, 0]],
         ["1/6", 0, 0, "2/3", "1/6"], [0, "1/3", "1/3", "1/2", 1], order=4),
-    e=tuple(Fr(x, 30) for x in (2, 0, -9, 8, -1)), iord=5, expo=0.2)
+    e=tuple(Fr(x, 30) for x in (2, 0, -9, 8, -1)), iord=5, expo=0.2, embedded_order=3)
 
 # Dormand-Prince 8(5,3), as in Hairer's DOP853: 12 stages, then f(y1) as a 13th (FSAL) stage.
 _A = [[_fr(dop853_data.A[i, j]) for j in range(13)] for i in range(12)]
 _A.append([_fr(x) for x in dop853_data.B] + [Fr(0)])
 DOP853 = Pair(
     tab=Tableau(tuple(tuple(r) for r in _A), tuple(_A[12]),
-                tuple(_fr(x) for x in dop853_data.C[:13]), order=8),
+                tuple(_fr(x) for x in dop853_data.C[:13]), order=8, tol=1e-14),
     e=tuple(_fr(x) for x in dop853_data.E5), e3=tuple(_fr(x) for x in dop853_data.E3),
-    iord=8, expo=1.0 / 8.0, beta=0.0, fac1=0.333, fac2=6.0,
+    iord=8, expo=1.0 / 8.0, beta=0.0, fac1=0.333, fac2=6.0, embedded_order=5, tol=1e-14,
     # Hairer's DOP853 (CONTD8): 3 extra stages over the 12, f(y1) and each other; 4 rows of D
     dense=DenseOutput(order=7,
                       d=tuple(tuple(float(x) for x in row) for row in dop853_data.D),
                       extra_a=tuple(tuple(float(x) for x in dop853_data.A[i, :i]) for i in range(13, 16)),
                       extra_c=tuple(float(x) for x in dop853_data.C[13:16]),
-                      reference="Hairer's DOP853, CONTD8; HNW I §II.6"))
+                      reference="Hairer's DOP853, CONTD8; HNW I §II.6", tol=1e-11))
 
 
 def _error_lines(pair: Pair, n: int) -> list[str]:
@@ -146,7 +153,7 @@ def generate_adaptive(pair: Pair):
         n, s, tab = ctx.n, pair.tab.stages, pair.tab
         count = s - 1 if pair.fsal else s
         lines, arities = stage_lines(tab, count, first="k0")
-        lines.append(f"    y1 = {combination(tab.b, arities)}")
+        lines.append(f"    y1 = {combination(tab.doubles[1], arities)}")
         fsal = pair.fsal and not pair.lazy_last
         if fsal:
             lines.append(f"    k{s - 1} = f(y1, par)")
@@ -172,7 +179,7 @@ def generate_adaptive(pair: Pair):
         if pair.dense is not None:            # integrate_dense, dense_coeffs and what they call
             dense_src, dense_arities = generate_dense(pair.dense, tab, count, n)
             arities |= dense_arities
-            dense_nfev = float(pair.dense.extra_stages)
+            dense_nfev = float(pair.dense.new_stages(tab))
             src += (dense_src + template(adaptive.dense_coeffs) + root_functions(n, sections)
                     + variant(drive, "integrate_dense", "DENSE_OUTPUT", "GRIDDED", "WITH_STAGES"))
             if sections:

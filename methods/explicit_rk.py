@@ -26,8 +26,9 @@ def _lincomb(name: str, n: int, k: int) -> str:
 def stage_lines(tab: Tableau, count: int, first: str = "f(y, par)") -> tuple[list[str], set[int]]:
     """Lines computing stages k0..k{count-1} of ``tab`` (zero coefficients skipped)."""
     lines, arities = [], set()
+    a = tab.doubles[0]
     for i in range(count):
-        terms = [(tab.a[i][j], j) for j in range(i) if tab.a[i][j] != 0]
+        terms = [(a[i][j], j) for j in range(i) if tab.a[i][j] != 0]
         if i == 0:
             lines.append(f"    k0 = {first}")
         elif terms:
@@ -57,7 +58,7 @@ def generate_erk(tab: Tableau):
         s = max(j for j, b in enumerate(tab.b) if b != 0) + 1   # trailing zero-weight stages unused
         lines, arities = stage_lines(tab, s)
         lines = ["\n@njit(cache=True)\ndef step(y, h, par, ws):"] + lines
-        lines.append(f"    return {combination(tab.b[:s], arities)}, {float(s)!r}, 0.0, STATUS_OK")
+        lines.append(f"    return {combination(tab.doubles[1][:s], arities)}, {float(s)!r}, 0.0, STATUS_OK")
         ws = "\n@njit(cache=True)\ndef make_ws():\n    return 0\n"
         return helpers(ctx.n, arities) + ws + "\n".join(lines) + "\n"
 

@@ -1,6 +1,7 @@
-"""External engines as competitor methods: heyoka's Taylor method, rebound's IAS15 and WHFast.
+"""External engines as competitor methods: heyoka's Taylor method, rebound's IAS15 and WHFast
+(scipy's solve_ivp solvers: :mod:`gnibench.methods.scipy_methods`).
 
-They are not compiled gnibench kernels. Each record carries ``run(problem_bound, values, grid) ->
+They are not compiled gnibench kernels. Each record carries ``run(problem_bound, values, grid, kernel) ->
 EngineRun`` (:mod:`gnibench.methods.engines.heyoka`, :mod:`gnibench.methods.engines.rebound`), and :func:`gnibench.suite.cell.solve.solve` calls it
 instead of the compiled driver. The output has the same columns as any other method (t, states, err_<I>, global_error,
 steps, nfev).
@@ -45,8 +46,9 @@ def _not_compiled(ctx) -> str:
 class ExternalMethod(Method):
     """A method run by an external engine.
 
-    ``run(problem_bound, values, grid) -> gnibench.methods.engines.heyoka.EngineRun`` integrates onto the sample grid
-    (:class:`gnibench.suite.cell.solve.SampleGrid`). ``grid_param`` names the option that spaces that grid (``h``
+    ``run(problem_bound, values, grid, kernel) -> gnibench.methods.engines.heyoka.EngineRun`` integrates onto the sample grid
+    (:class:`gnibench.suite.cell.solve.SampleGrid`); ``kernel`` is the problem's compiled module
+    (:func:`gnibench.suite.cell.compiled.problem_kernel`), for engines that call its field. ``grid_param`` names the option that spaces that grid (``h``
     or ``dt_out``). ``requires(problem_record)`` raises a UserError for problems the engine cannot
     take.
     """
@@ -74,19 +76,19 @@ class ExternalMethod(Method):
         return d
 
 
-def _run_heyoka(problem_bound, values, grid):
+def _run_heyoka(problem_bound, values, grid, kernel=None):
     from gnibench.methods.engines.heyoka import heyoka_propagate
 
     return heyoka_propagate(problem_bound, grid.t, values["precision"], values["tol"])
 
 
-def _run_ias15(problem_bound, values, grid):
+def _run_ias15(problem_bound, values, grid, kernel=None):
     from gnibench.methods.engines.rebound import rebound_propagate
 
     return rebound_propagate(problem_bound, grid.t, "ias15", epsilon=values["epsilon"])
 
 
-def _run_whfast(problem_bound, values, grid):
+def _run_whfast(problem_bound, values, grid, kernel=None):
     from gnibench.methods.engines.rebound import rebound_propagate
 
     return rebound_propagate(problem_bound, grid.t, "whfast", h=grid.h, step_counts=grid.step,

@@ -2,7 +2,9 @@
 
 Stages are solved by full Newton with the field's Jacobian to round-off (methods/kernels/irk.py).
 A step that does not converge in ``newton_maxit`` iterations ends the run with status
-``newton_failed``.
+``newton_failed``. With ``fixed_point = K`` the stages are solved instead by at most K fixed-point
+iterations (no Jacobian); a step that has not converged then is accepted with its last iterate and
+counted in ``njev`` ([HLW] Fig 2.4's implicit Euler, see methods/kernels/irk.py).
 """
 from __future__ import annotations
 
@@ -11,21 +13,23 @@ from fractions import Fraction as Fr
 from gnibench.methods.base import H_PARAM, NEWTON_PARAMS, Method
 from gnibench.methods.kernels import irk
 from gnibench.methods.tableau import Tableau, lit, tableau
+from gnibench.suite.foundation.params import Param
 from gnibench.suite.foundation.templates import template
 
 IMPLICIT_EULER = tableau([[1]], [1], [1], order=1)                      # [HLW] (1.6)
 IMPLICIT_MIDPOINT = tableau([["1/2"]], [1], ["1/2"], order=2)           # [HLW] (1.7)
 
 # Gauss-Legendre collocation (HLW II.1.3, Table 1.1-1.2); entries with sqrt(3), sqrt(15) are the
-# nearest doubles. 2 stages: Butcher's 4th-order implicit symplectic method ([B] §6, §8).
+# nearest doubles (so the order conditions hold to tol = 1e-15, not exactly). 2 stages: Butcher's
+# 4th-order implicit symplectic method ([B] §6, §8).
 _R3, _R15 = 3 ** 0.5, 15 ** 0.5
 GAUSS4 = tableau([[1 / 4, 1 / 4 - _R3 / 6], [1 / 4 + _R3 / 6, 1 / 4]], ["1/2", "1/2"],
-                 [1 / 2 - _R3 / 6, 1 / 2 + _R3 / 6], order=4)
+                 [1 / 2 - _R3 / 6, 1 / 2 + _R3 / 6], order=4, tol=1e-15)
 GAUSS6 = tableau([[5 / 36, 2 / 9 - _R15 / 15, 5 / 36 - _R15 / 30],
                   [5 / 36 + _R15 / 24, 2 / 9, 5 / 36 - _R15 / 24],
                   [5 / 36 + _R15 / 30, 2 / 9 + _R15 / 15, 5 / 36]],
                  ["5/18", "4/9", "5/18"], [1 / 2 - _R15 / 10, 1 / 2, 1 / 2 + _R15 / 10],
-                 order=6)
+                 order=6, tol=1e-15)
 
 
 def _d_coefficients(tab: Tableau) -> tuple[Fr, ...]:
@@ -50,15 +54,26 @@ def generate_irk(tab: Tableau):
                   "A = (" + ", ".join("(" + ", ".join(lit(x) for x in row) + ",)"
                                       for row in tab.a) + ",)",
                   "D = (" + ", ".join(lit(x) for x in d) + ",)"]
+        k = int(ctx.values.get("fixed_point", 0))
+        if k:                                   # fixed-point iteration instead of Newton
+            return ("\n" + "\n".join(consts + [f"FIXED_POINT = {k}"]) + "\n"
+                    + template(irk.make_ws)
+                    + template(irk.step_fixed_point, {"step_fixed_point": "step"}))
         return "\n" + "\n".join(consts) + "\n" + template(irk.make_ws) + template(irk.step)
 
     return generate
 
 
+FIXED_POINT_PARAM = Param(
+    "fixed_point", 0, "solve the stages by at most this many fixed-point iterations instead of "
+    "Newton (0: Newton); a step not converged then is accepted and counted in njev",
+    kind="int", low=0, high=100000, show_default=False)
+
+
 def irk_method(id, tab, reference, doc, **props):
     return Method(id=id, family="implicit-rk", order=tab.order, reference=reference, doc=doc,
                   generate=generate_irk(tab), data=tab, implicit=True,
-                  params=(H_PARAM,) + NEWTON_PARAMS, **props)
+                  params=(H_PARAM,) + NEWTON_PARAMS + (FIXED_POINT_PARAM,), **props)
 
 
 implicit_euler = irk_method("implicit-euler", IMPLICIT_EULER, "[HLW] (1.6)", "implicit Euler method")

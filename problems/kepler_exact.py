@@ -3,22 +3,37 @@
 The orbit is rebuilt from the initial point's elements (semi-major axis from the energy, the
 eccentricity vector from the Runge-Lenz vector) and advanced in mean anomaly; Kepler's equation
 E - e sin E = M is solved by Newton's method to round-off.
+
+Everything is computed in long double (x87 80-bit, eps 1.1e-19) and rounded to doubles at the end:
+in doubles the mean anomaly M = M0 + n t and the elements carry relative errors of a few ulps, which
+at e = 0.6 after 20 periods put the "exact" state 3.3e-13 off (measured against 40 digits with
+mpmath), more than the integrators it is meant to judge; in long double it is within 1 ulp or so.
 """
 from __future__ import annotations
 
 import numpy as np
 
 
-def solve_kepler(M: np.ndarray, e: float) -> np.ndarray:
-    """Solve E - e sin E = M (vectorized), Newton from E = M + e sin M, to round-off."""
-    M = np.asarray(M, dtype=float)
-    Mr = np.remainder(M + np.pi, 2 * np.pi) - np.pi          # reduce to [-pi, pi)
-    E = Mr + 0.85 * e * np.sign(Mr)                          # Danby's starting value
+LD = np.longdouble
+PI = LD("3.14159265358979323846264338327950288")
+
+
+def solve_kepler(M: np.ndarray, e) -> np.ndarray:
+    """Solve E - e sin E = M (vectorized), Newton from Danby's start, to round-off, in the
+    precision of M (long double when M is)."""
+    M = np.asarray(M)
+    if M.dtype != LD:
+        M = M.astype(float)
+    pi = PI if M.dtype == LD else np.pi
+    eps = np.finfo(M.dtype).eps
+    e = M.dtype.type(e)
+    Mr = np.remainder(M + pi, 2 * pi) - pi                    # reduce to [-pi, pi)
+    E = Mr + M.dtype.type(0.85) * e * np.sign(Mr)             # Danby's starting value
     for _ in range(60):
         f = E - e * np.sin(E) - Mr
         dE = f / (1 - e * np.cos(E))
         E = E - dE
-        if np.all(np.abs(dE) <= 4e-16 * (1 + np.abs(E))):
+        if np.all(np.abs(dE) <= 2 * eps * (1 + np.abs(E))):
             break
     return E + (M - Mr)
 
@@ -35,9 +50,12 @@ def kepler_period(q0, p0, mu: float = 1.0) -> float:
 
 
 def kepler_orbit_2d(q0, p0, t, mu=1.0):
-    """Positions and momenta (arrays (len(t), 2)) of the bound Kepler orbit through (q0, p0)."""
-    q0 = np.asarray(q0, dtype=float)
-    p0 = np.asarray(p0, dtype=float)
+    """Positions and momenta (arrays (len(t), 2)) of the bound Kepler orbit through (q0, p0),
+    computed in long double, returned as doubles."""
+    q0 = np.asarray(q0, dtype=float).astype(LD)
+    p0 = np.asarray(p0, dtype=float).astype(LD)
+    mu = LD(mu)
+    t = np.asarray(t, dtype=float).astype(LD)
     r0 = np.hypot(*q0)
     L = q0[0] * p0[1] - q0[1] * p0[0]
     energy = 0.5 * p0 @ p0 - mu / r0
@@ -45,7 +63,7 @@ def kepler_orbit_2d(q0, p0, t, mu=1.0):
         raise ValueError("kepler_orbit_2d needs a bound orbit (H < 0)")
     a = -mu / (2 * energy)
     evec = np.array([p0[1] * L, -p0[0] * L]) / mu - q0 / r0          # Runge-Lenz / mu
-    e = float(np.hypot(*evec))
+    e = np.hypot(*evec)
     n = np.sqrt(mu / a**3)
     s = 1.0 if L >= 0 else -1.0
     if e < 1e-13:                                                   # circular: measure from q0
@@ -66,4 +84,4 @@ def kepler_orbit_2d(q0, p0, t, mu=1.0):
     # perifocal -> inertial: x along the eccentricity vector, y rotated by +90 deg times sign(L)
     qx, qy = ex * x - s * ey * y, ey * x + s * ex * y
     px, py = ex * vx - s * ey * vy, ey * vx + s * ex * vy
-    return np.column_stack([qx, qy]), np.column_stack([px, py])
+    return (np.column_stack([qx, qy]).astype(float), np.column_stack([px, py]).astype(float))

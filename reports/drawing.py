@@ -24,11 +24,11 @@ from __future__ import annotations
 import contextlib
 import json
 import os
-import signal
 from dataclasses import dataclass
 from pathlib import Path
 
 from gnibench.reports.render import Plot, plot_key, render
+from gnibench.suite.foundation.processes import quiet_worker
 
 MANIFEST = "figures.json"
 PARALLEL_MIN = 2          # a fork costs milliseconds, a figure a tenth of a second or more
@@ -81,20 +81,6 @@ def _cpus() -> int:
 
 # -- the drawing process ----------------------------------------------------------------------
 
-def _quiet(parent: int) -> None:
-    """A drawing process's first act: Ctrl-C is the parent's business, SIGTERM ends it, and it
-    dies with its parent (Linux)."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)
-    if hasattr(os, "sched_getaffinity"):          # Linux: PR_SET_PDEATHSIG
-        import ctypes
-
-        with contextlib.suppress(OSError, AttributeError):
-            ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL, 0, 0, 0)
-    if os.getppid() != parent:
-        os._exit(1)
-
-
 def _serve(conn, parent: int, workers: int) -> None:
     """The drawing process: import matplotlib, then draw what comes ("draw", plot, path) by
     ``workers`` processes forked from this one; ("wait",) answers None or the failures."""
@@ -102,7 +88,7 @@ def _serve(conn, parent: int, workers: int) -> None:
     import traceback
     from concurrent.futures import ProcessPoolExecutor
 
-    _quiet(parent)
+    quiet_worker(parent)
     from matplotlib import font_manager
     from matplotlib.backends import backend_agg  # noqa: F401
     from matplotlib.figure import Figure  # noqa: F401
@@ -118,7 +104,7 @@ def _serve(conn, parent: int, workers: int) -> None:
             if message[0] == "draw":
                 if pool is None:
                     pool = ProcessPoolExecutor(workers, mp_context=mp.get_context("fork"),
-                                               initializer=_quiet, initargs=(os.getpid(),))
+                                               initializer=quiet_worker, initargs=(os.getpid(),))
                 futures.append(pool.submit(render, *message[1:]))
             elif message[0] == "wait":
                 errors = ["".join(traceback.format_exception(f.exception()))

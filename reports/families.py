@@ -44,6 +44,13 @@ def _default_texts(base: str) -> dict[str, str]:
     return out
 
 
+def _engine_adaptive(base: str) -> bool:
+    """An external engine that chooses its own steps (heyoka, IAS15, scipy's solvers)."""
+    from gnibench.methods import METHODS
+
+    return bool(getattr(METHODS.get(base), "adaptive", False))
+
+
 def _same(text: str, default: str) -> bool:
     try:
         return math.isclose(float(text), float(default), rel_tol=0, abs_tol=0)
@@ -59,7 +66,7 @@ def family_of(method: str) -> Family:
     base, given = spec.id, spec.base.given
     defaults = _default_texts(base)
     adaptive = given.get("adaptive", defaults.get("adaptive", "false")).lower() == "true" or \
-        base in ("heyoka-taylor", "rebound-ias15")
+        _engine_adaptive(base)
     sweep = next((k for k in ("h", "rtol", "tol", "epsilon") if k in given), "")
     if sweep == "h" and adaptive:
         sweep = ""

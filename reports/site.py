@@ -122,13 +122,14 @@ def _unique(name: str, taken: set[str]) -> str:
 def ledger_page(ledger, name: str, pages: set[str]) -> dict:
     """A claims ledger (gnibench verify): per section of the seeds, each claim with its verdict,
     the measured number beside the seed's and a link to its figure's page when the site has it."""
-    from gnibench.reports.ledger import ledger_context, render_ledger
+    from gnibench.reports.ledger import ledger_context, mutation_summary, render_ledger
 
     meta = ledger.meta or {}
+    mutants = mutation_summary(ledger.dir)
     return {"title": f"Claims ledger ({ledger.dir.name})", "name": name,
             "source": str(ledger.dir / "ledger.parquet"),
-            "markdown": render_ledger(ledger.table, meta),
-            **ledger_context(ledger.table, meta, pages)}
+            "markdown": render_ledger(ledger.table, meta, mutants),
+            **ledger_context(ledger.table, meta, pages, mutants)}
 
 
 MAX_NAV = 8

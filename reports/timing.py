@@ -30,17 +30,23 @@ def history(storage: Path) -> list[dict]:
             doc = load_run(f)
         except (ValueError, TypeError, OSError):
             continue
-        commit = (doc.get("commit_info") or {}).get("id") or ""
+        try:
+            commit = str((doc.get("commit_info") or {}).get("id") or "")
+        except AttributeError:
+            commit = ""
         for b in doc["benchmarks"]:
-            stats = b.get("stats") or {}
-            extra = b.get("extra_info") or {}
-            rows.append({"machine": machine, "run": f.name[:4], "commit": commit[:8],
-                         "date": str(doc.get("datetime", ""))[:16],
-                         "group": str(b.get("group") or "other"),
-                         "name": str(b.get("fullname") or b.get("name")),
-                         "median": float(stats.get("median", math.nan)),
-                         "min": float(stats.get("min", math.nan)),
-                         "unit": str(extra.get("unit") or "s per round")})
+            try:                        # a hand-edited or damaged entry is skipped, not a crash
+                stats = b.get("stats") or {}
+                extra = b.get("extra_info") or {}
+                rows.append({"machine": machine, "run": f.name[:4], "commit": commit[:8],
+                             "date": str(doc.get("datetime", ""))[:16],
+                             "group": str(b.get("group") or "other"),
+                             "name": str(b.get("fullname") or b.get("name")),
+                             "median": float(stats.get("median", math.nan)),
+                             "min": float(stats.get("min", math.nan)),
+                             "unit": str(extra.get("unit") or "s per round")})
+            except (AttributeError, TypeError, ValueError):
+                continue
     return rows
 
 

@@ -15,7 +15,10 @@ import math
 import numpy as np
 import pandas as pd
 import pytest
+from gnibench.methods import order_conditions as oc
+from gnibench.methods.dense_output import _quotients
 from gnibench.methods.embedded_rk import DOP853, DOPRI5
+from gnibench.methods.high_order_rk import VERN6, VERN7, VERN8, VERN9
 from gnibench.suite.cell.calls import COUNTERS
 from gnibench.suite.cell.codegen import load
 from gnibench.suite.cell.compiled import STATE, compile_cell, dense_output_refusal
@@ -26,7 +29,8 @@ from gnibench.suite.foundation.errors import UserError
 from gnibench.suite.metrics.global_error import global_errors
 from gnibench.suite.metrics.invariants import invariant_errors
 
-PAIRS = {"dopri5": DOPRI5, "dop853": DOP853}
+PAIRS = {"dopri5": DOPRI5, "dop853": DOP853, "vern6": VERN6, "vern7": VERN7, "vern8": VERN8,
+         "vern9": VERN9}
 EPS = np.finfo(float).eps
 
 
@@ -46,19 +50,19 @@ def _exact(prob, y0, t):
 # -- the coefficients ---------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("method", ["dopri5", "dop853"])
+@pytest.mark.parametrize("method", sorted(PAIRS))
 def test_extension_has_exactly_its_order(method):
-    """Every order condition up to the stated order holds as a polynomial identity in θ (exactly for
-    DOPRI5's rationals; 4.3e-12 measured for DOP853's doubles), and some condition one order up
-    fails by far (DOPRI5: 0.51, DOP853: 0.75)."""
+    """Every order condition up to the stated order holds as a polynomial identity in θ, in exact
+    arithmetic (methods/order_conditions.py, no cached verdict): exactly for rational data
+    (DOPRI5, Vern6), within the pair's stated tolerance for decimal data (DOP853's doubles: 4.3e-12
+    measured; Verner's 40-digit interpolant stages: 1e-30), and the conditions one order up fail."""
     pair = PAIRS[method]
-    q = pair.dense.order
-    res = pair.dense.residuals(pair.tab, q + 1)
-    if method == "dopri5":
-        assert res[:q] == [0.0] * q
-    else:
-        assert max(res[:q]) <= 1e-11
-    assert res[q] > 0.1
+    q, tol = pair.dense.order, pair.dense.tol
+    a, w = pair.dense.stages_a(pair.tab), pair.dense.weights(pair.tab, oc.number)
+    assert oc.check_dense(a, w, q, tol) == []
+    # one order up, in floats (exactly it costs a minute for Vern9): DOPRI5 0.51, DOP853 0.75,
+    # Vern7 1.3e-4 (its published order 7), far above the float residuals below q (<= 4.3e-12)
+    assert pair.dense.residuals(pair.tab, q + 1)[q] > (0.1 if method in ("dopri5", "dop853") else 1e-6)
 
 
 def test_dopri5_extension_is_scipys():
@@ -69,19 +73,27 @@ def test_dopri5_extension_is_scipys():
     assert np.array_equal(ours, RK45.P)
 
 
-@pytest.mark.parametrize("method", ["dopri5", "dop853"])
+DENSE_KERNELS = ["dopri5", "dop853", "vern6", "vern9"]   # Hairer's form; Verner's FSAL and not
+
+
+@pytest.mark.parametrize("method", DENSE_KERNELS)
 def test_endpoints(kepler, method):
-    """u(0) = y0 exactly, u(1) = y1 and u'(0) = h f(y0), u'(1) = h f(y1) to round-off."""
+    """u(0) = y0 exactly, u(1) = y1 and u'(0) = h f(y0), u'(1) = h f(y1) to round-off (the
+    slope's round-off grows with the size w of the weights: Verner's reach 7e5 for Vern8)."""
     prob, par, y0 = kepler
     mod, _, _ = load(prob, parse_method(method, prob))
     h = 0.05
+    pair = PAIRS[method]
+    w = max(1.0, max((sum(abs(float(q[k])) for q in _quotients(pair.dense, pair.tab))
+                      for k in range(pair.dense.degree - 1)), default=1.0)) \
+        if pair.dense.polynomial else 1.0
     y1, cf = mod.dense_coeffs(y0, h, par, mod.f(y0, par))
     assert mod.dense_eval(cf, 0.0) == y0
     scale = np.max(np.abs(y1))
     assert np.max(np.abs(np.subtract(mod.dense_eval(cf, 1.0), y1))) <= 4 * EPS * scale
     for theta, y in ((0.0, y0), (1.0, y1)):
         hf = h * np.array(mod.f(y, par))
-        assert np.max(np.abs(np.array(mod.dense_slope(cf, theta)) - hf)) <= 64 * EPS * scale
+        assert np.max(np.abs(np.array(mod.dense_slope(cf, theta)) - hf)) <= 64 * EPS * scale * w
 
 
 def _slope(hs, errs, floor=1e-13):
@@ -94,7 +106,12 @@ def _slope(hs, errs, floor=1e-13):
 @pytest.mark.parametrize("method,h0", [("dopri5", 0.4), ("dop853", 0.8)])
 def test_interpolant_order(kepler, method, h0):
     """Local error of u(θ) at interior θ against the exact flow: O(h^(q+1)) for an order-q
-    extension (|slope - (q+1)| <= 0.35, the verification tolerance of STYLE.md)."""
+    extension (|slope - (q+1)| <= 0.35, the verification tolerance of STYLE.md).
+
+    Not measurable this way for Verner's extensions (their order is proved by the exact
+    conditions above): measured 7.45 for Vern6 (order 6), 8.83 for Vern7 (order 6, 1.3e-4 short
+    of 7), and Vern8's weights (up to 1.4e6, cancelling) put its round-off floor at 4e-13 after
+    three halvings."""
     prob, par, y0 = kepler
     mod, _, _ = load(prob, parse_method(method, prob))
     hs = h0 / 2.0 ** np.arange(8)
@@ -109,7 +126,7 @@ def test_interpolant_order(kepler, method, h0):
     assert abs(slope - (q + 1)) <= 0.35
 
 
-@pytest.mark.parametrize("method", ["dopri5", "dop853"])
+@pytest.mark.parametrize("method", DENSE_KERNELS)
 def test_recomputed_step_is_the_drivers(method):
     """dense_coeffs(y_n, h_n) ends on the driver's y_n+1 bit for bit, at every accepted step."""
     prob, cfg = prepare("kepler-2d", f"{method}:rtol=1e-10,atol=1e-10")
@@ -120,7 +137,7 @@ def test_recomputed_step_is_the_drivers(method):
     code, n = cell.kernel.integrate_adaptive(y_io, st, cell.par, t_end, v["h0"], t_end, v["rtol"],
                                              v["atol"], 1, 0.0, 0, v["max_steps"], 1 << 40, t, Y, C)
     t, Y, H = t[:n], Y[:n], C[:n, 4]             # the 5th column: size of the step ending there
-    assert code == 0 and len(t) > 100 and H[0] == 0.0 and np.all(H[1:] > 0)
+    assert code == 0 and len(t) > 50 and H[0] == 0.0 and np.all(H[1:] > 0)
     for n in range(len(t) - 1):
         y = tuple(Y[n])
         y1, _ = cell.kernel.dense_coeffs(y, float(H[n + 1]), cell.par, cell.kernel.f(y, cell.par))
@@ -137,7 +154,7 @@ def _dense_steps(t_steps: np.ndarray, t_grid: np.ndarray) -> int:
     return len(np.unique(np.searchsorted(t_steps, t_grid, side="left")))
 
 
-@pytest.mark.parametrize("method,tol", [("dopri5", 1e-10), ("dop853", 1e-12)])
+@pytest.mark.parametrize("method,tol", [("dopri5", 1e-10), ("dop853", 1e-12), ("vern9", 1e-12)])
 @pytest.mark.parametrize("every", [1, 7])
 def test_dt_out_keeps_the_steps(method, tol, every):
     spec = f"{method}:rtol={tol},atol={tol}"
@@ -151,7 +168,7 @@ def test_dt_out_keeps_the_steps(method, tol, every):
     k = np.arange(0, 1257, every)
     assert np.array_equal(dense.t[:-1], k * 0.01)
     # DOP853: 3 more evaluations per step that holds grid points; DOPRI5: none
-    extra = PAIRS[method].dense.extra_stages * _dense_steps(steps.t, k[1:] * 0.01)
+    extra = PAIRS[method].dense.new_stages(PAIRS[method].tab) * _dense_steps(steps.t, k[1:] * 0.01)
     assert dense.nfev[-1] - steps.nfev[-1] == extra
     assert extra > 0 or method == "dopri5"
     # columns and cumulative counters as without dt_out

@@ -11,6 +11,7 @@ Floors, from the ground up (README, "Layout"; ``suite/__init__.py``)::
     6 gnibench.suite.ledger       the claims ledger: entries, closed forms, identity checks, verdicts
     7 gnibench.reports            reports from tables
     8 gnibench.suite.cli          the command line
+    9 gnibench.suite.api          the Python API (the package top re-exports it)
 
 A module may import from its own floor or below. Every import counts, also those made inside a
 function (they are for start-up time only, never to dodge a circle).
@@ -35,6 +36,7 @@ FLOORS = (
     ("gnibench.suite.ledger", 6),
     ("gnibench.reports", 7),
     ("gnibench.suite.cli", 8),
+    ("gnibench.suite.api", 9),
 )
 # package markers with no code of their own (docstrings, the version)
 NEUTRAL = {"gnibench", "gnibench.suite"}

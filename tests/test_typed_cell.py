@@ -93,7 +93,8 @@ def test_text_and_typed_values_give_the_same_cell_and_samples():
 def test_method_kind_is_data():
     assert {m.kind for m in METHODS.values()} <= set(KINDS)
     externals = {k for k, m in METHODS.items() if m.kind == "external"}
-    assert externals == {"heyoka-taylor", "rebound-ias15", "rebound-whfast"}
+    assert externals == {"heyoka-taylor", "rebound-ias15", "rebound-whfast", "scipy-rk45",
+                         "scipy-rk23", "scipy-dop853", "scipy-radau", "scipy-bdf", "scipy-lsoda"}
     assert set(COMPILED) == set(METHODS) - externals
     for path in list((ROOT / "suite").rglob("*.py")) + list((ROOT / "methods").rglob("*.py")):
         assert not re.search(r"getattr\([^)]*[\"']run[\"']", path.read_text()), path

@@ -36,8 +36,9 @@ class EngineRun:
 
     ``y`` is float64; ``y_full`` the same samples in the working precision (None for double).
     ``steps`` is cumulative per sample; ``nfev`` cumulative force evaluations, NaN where the
-    engine does not expose them. ``status`` is ``ok`` or ``nonfinite``; after a failure only the
-    samples reached are kept.
+    engine does not expose them; ``njev`` cumulative Jacobian evaluations (None: the engine
+    evaluates none). ``status`` is a Status value (``ok``, ``nonfinite``, ...); after a failure
+    only the samples reached are kept.
     """
 
     y: np.ndarray
@@ -49,3 +50,4 @@ class EngineRun:
     setup_seconds: float
     seconds: float
     info: dict
+    njev: np.ndarray | None = None

@@ -3,11 +3,18 @@
 Stage increments Z_i = Y_i - y solve Z_i = h sum_j a_ij f(y + Z_j); the new point is
 y1 = y + sum_j d_j Z_j with d = b^T A^{-1} (no extra f-evaluation). Newton uses the Jacobian of f
 at the current iterate (full Newton), so it converges quadratically to round-off.
+
+``step_fixed_point`` (method option ``fixed_point = K``) solves the same equations by at most K
+fixed-point iterations Z <- h A F(y + Z), the simplest solver and the one behind [HLW] Fig 2.4's
+implicit Euler (I.2.4): a step whose iteration has not converged after K iterations is accepted
+with its last iterate (not a failure), and counted in ``njev`` (no Jacobian is evaluated by this
+solver, so ``njev`` records where the iteration did not converge).
 """
 from __future__ import annotations
 
 import numpy as np
 from gnibench.methods.kernels.free import (
+    FIXED_POINT,
     NEWTON_MAXIT,
     STATUS_NEWTON_FAILED,
     STATUS_OK,
@@ -81,3 +88,40 @@ def step(y, h, par, ws):
             acc += D[j] * Z[j, i]
         out[i] = y[i] + acc
     return to_tuple(out), nfev, njev, STATUS_OK
+
+
+def step_fixed_point(y, h, par, ws):
+    Z, F, _M, _r, _J, _piv, out = ws
+    scale = 1.0
+    for i in range(N):
+        scale = max(scale, abs(y[i]))
+        for j in range(S):
+            Z[j, i] = 0.0
+    nfev = 0.0
+    prev = np.inf
+    converged = False
+    for it in range(FIXED_POINT):
+        for j in range(S):
+            store(f(shifted(y, Z, j), par), F, j)
+        nfev += S
+        dnorm = 0.0
+        for a in range(S):
+            for i in range(N):
+                acc = 0.0
+                for j in range(S):
+                    acc += A[a][j] * F[j, i]
+                dz = h * acc - Z[a, i]
+                Z[a, i] += dz
+                dnorm = max(dnorm, abs(dz))
+        if not dnorm < np.inf:
+            break
+        if newton_done(dnorm, prev, scale):
+            converged = True
+            break
+        prev = dnorm
+    for i in range(N):
+        acc = 0.0
+        for j in range(S):
+            acc += D[j] * Z[j, i]
+        out[i] = y[i] + acc
+    return to_tuple(out), nfev, 0.0 if converged else 1.0, STATUS_OK

@@ -24,6 +24,7 @@ from typing import Any
 
 from gnibench.suite.foundation.cache import (
     cache_dir,
+    discard,
     record_numba_files,
     verify_numba_files,
     warn,
@@ -143,9 +144,9 @@ def _import(text: str, prefix: str):
         if stored != text:           # the file is named by the hash of its text: it was modified
             warn(f"cached kernel module {path.name} is corrupt or was modified (it does not match "
                  f"the text it is named after); discarded and rebuilt")
-            path.unlink()
+            discard(path)
             for f in path.parent.glob(f"__pycache__/{path.stem}.*"):
-                f.unlink(missing_ok=True)
+                discard(f)
     if not path.exists():
         write_atomic(path, text)
     verify_numba_files(path)

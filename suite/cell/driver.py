@@ -283,12 +283,13 @@ def _external(problem: Bound, method, sg: SampleGrid) -> Trajectory:
     rec = problem.record
     y0 = tuple(rec.y0(problem.values))
     pk = problem_kernel(problem)
-    run = method.base.record.run(problem, method.base.values, sg)
+    run = method.base.record.run(problem, method.base.values, sg, pk)
     t = sg.t[:len(run.y)]
     status = Status(run.status)
     return Trajectory(
         problem=problem.text(), method=method.text(), state_names=rec.state, t=t, y=run.y,
-        steps=run.steps, nfev=np.asarray(run.nfev, dtype=float), njev=np.zeros(len(t)),
+        steps=run.steps, nfev=np.asarray(run.nfev, dtype=float),
+        njev=np.zeros(len(t)) if run.njev is None else np.asarray(run.njev, dtype=float),
         rejected=np.zeros(len(t)), integral_names=pk.integral_names, integrals=pk.integrals(run.y),
         H0=pk.at(y0), y0=y0, status=status, reason=run.reason,
         provenance={"versions": versions(), "h": sg.h, "nsteps": sg.nsteps, "h_last": sg.h_last,

@@ -6,7 +6,7 @@ import platform
 import sys
 from importlib.metadata import PackageNotFoundError, version
 
-from gnibench import __version__
+from gnibench.suite.foundation.version import VERSION as __version__
 
 PACKAGES = ("numpy", "scipy", "numba", "sympy", "heyoka", "rebound", "pandas", "pyarrow")
 

@@ -14,10 +14,10 @@ from gnibench.suite.ledger.identity_tools import (
 
 def lv_invariant() -> dict:
     """[HLW] (1.4): I = ln u − u + 2 ln v − v is an invariant (∇I·f = 0), and an accurate trajectory
-    (dop853, 1e-12, t = 20) keeps it."""
+    (dop853, 1e-14, t = 20) keeps it."""
     from gnibench.suite.cell.solve import solve
 
-    traj = solve("lotka-volterra", "dop853:rtol=1e-12,atol=1e-12", t_end=20.0)
+    traj = solve("lotka-volterra", "dop853:rtol=1e-14,atol=1e-14", t_end=20.0)
     drift = float(np.max(np.abs(traj.integrals[:, 0] - traj.H0[0])))
     return {"residual": conservation_residual("lotka-volterra"), "trajectory": drift,
             "measured": drift}

@@ -19,6 +19,7 @@ kernels run in parallel.
 from __future__ import annotations
 
 import os
+import signal
 from collections.abc import Callable, Iterator
 
 from gnibench.suite.foundation.errors import UserError
@@ -54,6 +55,10 @@ def check(executor: str, jobs: int | None, scheduler: str | None) -> None:
         except ImportError:
             raise UserError("--executor dask needs dask[distributed]: pip install "
                             "'gnibench[dask]'") from None
+    if scheduler is not None:      # before the output directory exists: is a scheduler there?
+        from gnibench.suite.runs.scheduler import probe
+
+        probe(scheduler)
 
 
 def start(executor: str, jobs: int | None, cells: int, zygote=None):
@@ -73,8 +78,8 @@ def run(groups: list[list], executor: str = "local", jobs: int | None = None,
         pool=None) -> Iterator[CellOutcome]:
     """Run the cells of ``groups`` and yield their outcomes as they finish (``pool``: the local
     pool of :func:`start`, else one is started here when needed)."""
-    jobs = jobs or default_jobs()
     total = sum(len(g) for g in groups)
+    jobs = max(1, min(jobs or default_jobs(), total))     # -j 1000 for 6 cells: 6 processes
     if executor == "dask":
         yield from _dask(groups, jobs, scheduler)
     elif total == 0:
@@ -105,14 +110,23 @@ def _dask(groups, jobs, scheduler) -> Iterator[CellOutcome]:
 
     cluster = None
     if scheduler is None:
-        cluster = LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True,
-                               dashboard_address=None)
-        client = Client(cluster)
+        # SIGINT blocked while the cluster starts: its threads and worker processes inherit the
+        # mask, so a Ctrl-C at the terminal reaches this process only (which closes the cluster)
+        # instead of printing a traceback from every worker; a Ctrl-C meanwhile waits, not lost
+        blocked = {signal.SIGINT}
+        signal.pthread_sigmask(signal.SIG_BLOCK, blocked)
+        try:
+            cluster = LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True,
+                                   dashboard_address=None)
+            client = Client(cluster)
+        finally:
+            signal.pthread_sigmask(signal.SIG_UNBLOCK, blocked)
     else:
         try:
             client = Client(scheduler, timeout="10s")
-        except (OSError, TimeoutError) as e:
-            raise UserError(f"bad --scheduler {scheduler!r}: cannot connect ({e})") from None
+        except Exception as e:  # noqa: BLE001 - it answered the probe, then went away
+            raise UserError(f"bad --scheduler {scheduler!r}: cannot connect "
+                            f"({type(e).__name__}: {e})") from None
     try:
         waiting = {}                   # pure=False: fresh keys, never a result of another run
         for g in groups:
@@ -123,7 +137,13 @@ def _dask(groups, jobs, scheduler) -> Iterator[CellOutcome]:
             for cell in waiting.pop(fut, []):
                 pending.add(client.submit(run_cell, cell, pure=False))
             yield fut.result()
+    except BaseException:
+        import logging
+
+        # Ctrl-C: the workers are stopped mid-cell; Dask's warnings about that are no news
+        logging.getLogger("distributed").setLevel(logging.ERROR)
+        raise
     finally:
         client.close()
         if cluster is not None:
-            cluster.close()
+            cluster.close(timeout=5)

@@ -43,6 +43,7 @@ from pathlib import Path
 
 import numpy as np
 from gnibench.suite.foundation.cache import atomic_write
+from gnibench.suite.foundation.outputs import fault
 from gnibench.suite.foundation.provenance import versions
 from gnibench.suite.runs import executors
 from gnibench.suite.runs.cellwork import CellOutcome, kernel_group
@@ -125,30 +126,37 @@ def run_experiments(experiments: list[Experiment], outs: list[Path], store_root:
         print(f"gnibench: {name}: {len(unique)} cells -> {where} ({len(done)} reused from the "
               f"store, {len(todo)} to compute)", file=log, flush=True)
         progress = RunProgress(len(unique), len(done), log, name)
+        outcomes = executors.run(_groups(todo), executor, jobs, scheduler, progress.cell_progress,
+                                 pool)
         try:
-            for outcome in executors.run(_groups(todo), executor, jobs, scheduler,
-                                         progress.cell_progress, pool):
-                key = key_of.get(id(outcome.cell)) or cell_key(outcome.cell)
-                store.write(key, _part(outcome), writers[0].empty_samples)
-                done.add(key)
-                progress.cell_done(outcome)
-                for w in writers:      # only the experiments that hold the cell have news
-                    if key in w.key_set:
-                        w.dirty = True
-                    if w.dirty and w.due():
-                        w.flush(done)
-        except KeyboardInterrupt:
-            progress.close()
+            with contextlib.closing(outcomes):      # an error stops the workers at once
+                for outcome in outcomes:
+                    key = key_of.get(id(outcome.cell)) or cell_key(outcome.cell)
+                    store.write(key, _part(outcome), writers[0].empty_samples)
+                    done.add(key)
+                    progress.cell_done(outcome)
+                    for w in writers:      # only the experiments that hold the cell have news
+                        if key in w.key_set:
+                            w.dirty = True
+                        if w.dirty and w.due():
+                            w.flush(done)
             for w in writers:
                 w.flush(done)
+        except KeyboardInterrupt:
+            progress.close()
+            with contextlib.suppress(OSError):
+                for w in writers:
+                    w.flush(done)
             print(f"gnibench: interrupted: {len(done)} of {len(unique)} cells are stored in "
                   f"{store_root}; run the same command again to compute the rest", file=log,
                   flush=True)
             raise
+        except OSError as e:          # the disk filled up, say: what is stored stays
+            raise fault(e, "the run", f"{len(done)} of {len(unique)} cells are stored in "
+                        f"{store_root}; run the same command again once the cause is "
+                        f"removed") from None
         finally:
             progress.close()
-        for w in writers:
-            w.flush(done)
     return outs
 
 

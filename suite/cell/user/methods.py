@@ -53,6 +53,12 @@ class Tab:
     def explicit(self) -> bool:
         return all(self.a[i][j] == 0 for i in range(self.stages) for j in range(i, self.stages))
 
+    @property
+    def doubles(self) -> tuple[tuple[tuple[float, ...], ...], tuple[float, ...]]:
+        """(A, b) as the kernels use them (methods/tableau.py ``Tableau.doubles``): the entries
+        are already the nearest doubles."""
+        return tuple(tuple(float(x) for x in row) for row in self.a), tuple(float(x) for x in self.b)
+
 
 def build_method(e: Entry, origin, known) -> Method:
     """The method record of one entry; ``known(id)`` finds a basis (registered, or defined

@@ -107,9 +107,10 @@ def _state(value, n: int) -> np.ndarray:
 
 
 def stepper(entry: str, base: str):
-    """``run(problem, values, grid) -> EngineRun`` of a ``python`` method."""
+    """``run(problem, values, grid, kernel) -> EngineRun`` of a ``python`` method (``kernel``: the
+    problem's compiled module, passed by the driver to every engine; unused here)."""
 
-    def run(problem, values, grid) -> EngineRun:
+    def run(problem, values, grid, kernel=None) -> EngineRun:
         t0 = time.perf_counter()
         step = resolve_entry(entry, base)
         f, count = _field(problem)
@@ -147,9 +148,9 @@ def stepper(entry: str, base: str):
 
 
 def solver(entry: str, base: str):
-    """``run(problem, values, grid) -> EngineRun`` of a ``python-solver`` method."""
+    """``run(problem, values, grid, kernel) -> EngineRun`` of a ``python-solver`` method."""
 
-    def run(problem, values, grid) -> EngineRun:
+    def run(problem, values, grid, kernel=None) -> EngineRun:
         t0 = time.perf_counter()
         solve = resolve_entry(entry, base)
         f, count = _field(problem)

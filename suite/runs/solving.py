@@ -1,0 +1,84 @@
+"""One cell solved and tabled: what ``gnibench solve`` writes and ``gnibench.solve`` returns.
+
+:func:`solve_cell_spec` checks the options and makes the typed cell (before any work: the command
+line starts its progress display after it), :func:`solve_output` solves the cell, applies its
+metrics and builds the table
+(:func:`gnibench.suite.runs.tables.sample_frame`) and its metadata
+(:func:`gnibench.suite.runs.storage.provenance`). The command line writes both
+(:func:`gnibench.suite.runs.storage.write_frame`); the Python API returns them as a DataFrame and
+the JSON metadata as a dict (:func:`json_meta`), so the two cannot drift apart.
+"""
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+
+from gnibench.suite.foundation.errors import UserError
+
+
+@dataclass
+class SolveOutput:
+    """A solved cell: its trajectory (:class:`gnibench.suite.cell.trajectory.Trajectory`),
+    metric outputs, chosen metrics that did not apply (id -> why), table, metadata, the
+    Ctrl-C that stopped it (None if it ran to its end) and the typed cell
+    (:class:`gnibench.suite.cell.cellspec.CellSpec`)."""
+
+    traj: object
+    metrics: object
+    skipped: dict
+    frame: object
+    meta: dict
+    interrupted: BaseException | None = None
+    cell: object = None
+
+
+def check_options(every: int, section, reference, dt_out) -> None:
+    """Options that exclude each other (the command line's flag names in the messages)."""
+    if section is not None:
+        if every != 1:
+            raise UserError("--every does not apply with --section (the section points are written)")
+        if reference is not None:
+            raise UserError("--reference does not apply with --section (no global error is "
+                            "written)")
+        if dt_out is not None:
+            raise UserError("--dt-out does not apply with --section (the section points are "
+                            "written)")
+
+
+def solve_cell_spec(problem, method, *, steps: int | None = None, t_end: float | None = None,
+                    every: int = 1, dt_out: float | None = None, section: int | None = None,
+                    reference=None, metrics=()):
+    """The typed cell of a solve (:func:`gnibench.suite.metrics.cells.make_cell`), after the
+    checks of options that exclude each other. ``problem``, ``method``: spec strings or typed
+    values; ``metrics``: metric specs (a list, or one comma-separated string) or parsed choices.
+    Bad input raises UserError before any work."""
+    from gnibench.suite.metrics.cells import make_cell
+
+    check_options(every, section, reference, dt_out)
+    return make_cell(problem, method, steps=steps, t_end=t_end, every=every, dt_out=dt_out,
+                     section=section, reference=reference, metrics=metrics)
+
+
+def solve_output(cell, progress=None) -> SolveOutput:
+    """Solve a typed cell (:func:`solve_cell_spec`) and build its table and metadata; Ctrl-C is
+    kept in ``interrupted`` with the samples computed so far."""
+    from gnibench.suite.cell.driver import Interrupted
+    from gnibench.suite.cell.solve import solve_cell
+    from gnibench.suite.metrics.compute import apply
+    from gnibench.suite.runs.storage import provenance
+    from gnibench.suite.runs.tables import sample_frame
+
+    interrupted = None
+    try:
+        traj = solve_cell(cell, progress=progress)
+    except Interrupted as e:                  # keep what was computed
+        traj, interrupted = e.partial, e
+    out, skipped = apply(traj, cell.metrics, problem=cell.problem)
+    return SolveOutput(traj, out, skipped, sample_frame(traj, out), provenance(traj, out),
+                       interrupted, cell)
+
+
+def json_meta(meta: dict) -> dict:
+    """The metadata as the JSON output carries it (``gnibench solve --format json``'s ``meta``):
+    the same serialization, read back."""
+    return json.loads(json.dumps(meta, default=str))
