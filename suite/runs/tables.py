@@ -1,6 +1,4 @@
 """Tables from trajectories and their metric outputs: the one-cell table of ``gnibench solve`` and
-    import pandas as pd
-
 the three tables of an experiment run.
 
 ``samples`` (one row per cell and sample), ``cells`` (one row per cell) and ``timings`` (one row per
