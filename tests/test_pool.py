@@ -1,19 +1,23 @@
 """The runner's local pool: the plan (kernel groups, affinity, longest first), workers that never
-import pandas, the zygote, a dead worker, no process left behind; the tables of a pool run are
-those of a serial run (tests/test_runner_store.py checks -j 1, -j 2 and Dask on the command line)."""
+import pandas, quiet workers, a dead worker, a run stopped early, fitting the pool to the cells, no
+process left behind; the tables of a pool run are those of a serial run (tests/test_runner_store.py
+checks -j 1, -j 2 and Dask on the command line).
+
+No test depends on timing: each waits for an outcome or a process's end, never for a time."""
 from __future__ import annotations
 
 import os
+import signal
 import subprocess
 import sys
 from types import SimpleNamespace
 
-import gnibench.suite.runs.pool as pool
 import pandas as pd
 import pytest
+from gnibench.suite.foundation.outputs import Fault
 from gnibench.suite.runs.cellwork import run_cell, with_frame
 from gnibench.suite.runs.experiment import parse_experiment
-from gnibench.suite.runs.pool import Plan, Pool, Zygote, longest_first
+from gnibench.suite.runs.pool import Plan, Pool, longest_first
 from gnibench.suite.runs.runner import _groups
 
 SMALL = """
@@ -89,27 +93,68 @@ def _children() -> set[int]:
         return {int(p) for p in f.read().split()}
 
 
-@pytest.mark.skipif(not Zygote.available(), reason="the zygote needs Linux")
-@pytest.mark.parametrize("with_zygote", [False, True])
-def test_pool_runs_every_cell_once_and_leaves_nothing(with_zygote):
+LINUX = pytest.mark.skipif(not os.path.exists(f"/proc/{os.getpid()}/task"), reason="/proc")
+
+
+@LINUX
+def test_pool_runs_every_cell_once_and_leaves_nothing():
     before = _children()
     todo = cells()
-    zygote = Zygote().start() if with_zygote else None
-    try:
-        with Pool(2, zygote).start() as p:
-            outcomes = list(p.run(_groups(todo)))
-    finally:
-        if zygote is not None:
-            zygote.stop()
+    with Pool(2).start() as p:
+        assert len(_children() - before) == 2                  # forked before the cells are known
+        outcomes = list(p.run(_groups(todo)))
     assert sorted(o.cell.id for o in outcomes) == [c.id for c in todo]
     assert all(o.status == "ok" and isinstance(o.samples, pd.DataFrame) for o in outcomes)
     assert _children() == before
 
 
-@pytest.mark.skipif(not Zygote.available(), reason="the zygote needs Linux")
+@LINUX
+def test_fit_ends_the_idle_workers_beyond_the_cells_and_forks_the_missing_ones():
+    before = _children()
+    with Pool(2).start() as p:
+        first = _children() - before
+        p.fit(1)
+        assert len(_children() - before) == 1 and (_children() - before) < first
+        p.fit(3)
+        assert len(_children() - before) == 3
+        outcomes = list(p.run(_groups(cells())))
+        assert sorted(o.cell.id for o in outcomes) == list(range(6))
+        p.fit(0)
+        assert _children() == before
+    assert _children() == before
+
+
+@LINUX
+def test_a_worker_ignores_sigint_and_ends_on_sigterm():
+    """Ctrl-C reaches the whole process group: the parent decides (quiet_worker)."""
+    before = _children()
+    todo = cells()
+    with Pool(1).start() as p:
+        (worker,) = _children() - before
+        assert [o.status for o in p.run(_groups(todo[:1]))] == ["ok"]   # its handlers are set
+        os.kill(worker, signal.SIGINT)
+        assert [o.status for o in p.run(_groups(todo[1:2]))] == ["ok"]  # still serving
+        os.kill(worker, signal.SIGTERM)
+        with pytest.raises(Fault, match=r"died \(signal SIGTERM\) while running cell 2"):
+            list(p.run(_groups(todo[2:3])))
+    assert _children() == before
+
+
+@LINUX
+def test_a_run_stopped_early_terminates_the_workers_at_once():
+    """The caller stops after the first outcome (Ctrl-C in the runner closes the generator): the
+    cells still running are not waited for."""
+    before = _children()
+    p = Pool(2).start()
+    run = p.run(_groups(cells()))
+    next(run)
+    run.close()
+    assert _children() == before and p.conns == []
+
+
+@LINUX
 def test_a_dead_worker_fails_the_run_with_its_cell(monkeypatch):
-    real = pool.run_cell if hasattr(pool, "run_cell") else None
-    import gnibench.suite.runs.cellwork as cellwork
+    from gnibench.suite.runs import cellwork
 
     original = cellwork.run_cell
 
@@ -120,8 +165,7 @@ def test_a_dead_worker_fails_the_run_with_its_cell(monkeypatch):
 
     monkeypatch.setattr(cellwork, "run_cell", dying)           # inherited by the fork
     before = _children()
-    with pytest.raises(RuntimeError, match="died while running cell 4"):
-        with Pool(2).start() as p:
-            list(p.run(_groups(cells())))
+    died = r"died \(exit code 3\) while running cell 4"
+    with pytest.raises(Fault, match=died), Pool(2).start() as p:
+        list(p.run(_groups(cells())))
     assert _children() == before
-    assert real is None

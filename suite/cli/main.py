@@ -222,15 +222,14 @@ def _list(a) -> int:
 
 
 def _run(a) -> int:
-    from gnibench.suite.runs.pool import Zygote
+    from gnibench.suite.runs import executors
 
-    # first: the pool's workers get ready (numba, pandas) while the experiment is read
-    pooled = a.executor == "local" and a.jobs != 1 and Zygote.available()
-    with Zygote().start() if pooled else contextlib.nullcontext() as zygote:
-        return _run_with(a, zygote)
+    # first: the pool's workers get ready (numba) while the experiment is read (-j 1, Dask: None)
+    with executors.start(a.executor, a.jobs) or contextlib.nullcontext() as pool:
+        return _run_with(a, pool)
 
 
-def _run_with(a, zygote) -> int:
+def _run_with(a, pool) -> int:
     from gnibench.reports.drawing import Drawers
     from gnibench.reports.markdown import render_summary
     from gnibench.suite.runs.runner import run_experiment
@@ -239,7 +238,7 @@ def _run_with(a, zygote) -> int:
         out = run_experiment(a.experiment, a.output, jobs=a.jobs, executor=a.executor,
                              scheduler=a.scheduler, fresh=a.fresh, summarize=render_summary,
                              scale=a.scale, started=None if a.no_report else drawers.start,
-                             zygote=zygote)
+                             pool=pool)
         if not a.no_report:
             from gnibench.reports.site import build_site
 

@@ -61,16 +61,21 @@ def check(executor: str, jobs: int | None, scheduler: str | None) -> None:
         probe(scheduler)
 
 
-def start(executor: str, jobs: int | None, cells: int, zygote=None):
-    """The local pool, started now (its workers get ready while the caller prepares the
-    cells; :mod:`gnibench.suite.runs.pool`; ``zygote``: a :class:`~gnibench.suite.runs.pool.Zygote`
-    to fork them), or None where none is needed (serial, Dask, a single cell, no fork)."""
-    jobs = min(jobs or default_jobs(), cells)
-    if executor != "local" or jobs < 2 or not hasattr(os, "fork"):
+def workers(jobs: int | None, cells: int) -> int:
+    """How many workers ``-j jobs`` gives ``cells`` cells (-j 1000 for 6 cells: 6 processes)."""
+    return max(0, min(jobs or default_jobs(), cells))
+
+
+def start(executor: str, jobs: int | None, cells: int | None = None):
+    """The local pool, started now (its workers get ready while the caller prepares the cells;
+    :mod:`gnibench.suite.runs.pool`), or None where none is needed (serial, Dask, a single cell,
+    no fork). ``cells`` unknown: at most one worker per core for now (see ``Pool.fit``)."""
+    n = workers(jobs, default_jobs() if cells is None else cells)
+    if executor != "local" or n < 2 or not hasattr(os, "fork"):
         return None
     from gnibench.suite.runs.pool import Pool
 
-    return Pool(jobs, zygote).start()
+    return Pool(n).start()
 
 
 def run(groups: list[list], executor: str = "local", jobs: int | None = None,
@@ -79,7 +84,7 @@ def run(groups: list[list], executor: str = "local", jobs: int | None = None,
     """Run the cells of ``groups`` and yield their outcomes as they finish (``pool``: the local
     pool of :func:`start`, else one is started here when needed)."""
     total = sum(len(g) for g in groups)
-    jobs = max(1, min(jobs or default_jobs(), total))     # -j 1000 for 6 cells: 6 processes
+    jobs = max(1, workers(jobs, total))
     if executor == "dask":
         yield from _dask(groups, jobs, scheduler)
     elif total == 0:

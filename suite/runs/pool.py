@@ -1,13 +1,14 @@
-"""The runner's local process pool: workers that get ready while the cells are prepared, stay
-warm, and keep the kernels they loaded.
+"""The runner's local process pool: workers forked before the cells are prepared, that stay warm
+and keep the kernels they loaded.
 
 * **Ready early.** A fresh process pays about half a second before its first cell: numba and
   numba's CPU target (its typing and lowering registries); pandas it never needs (the samples
-  travel as arrays, the parent makes the table). :meth:`Pool.start` forks the
-  workers as soon as the experiment is valid, and each pays that (:func:`preload`) while the
-  parent opens the store and groups the cells. ``gnibench run`` does better: its first act is to
-  fork a :class:`Zygote`, a process that imports all that while the command imports the runner
-  and reads the experiment, and then forks the workers from itself, ready at once (Linux).
+  travel as arrays, the parent makes the table). ``gnibench run`` starts the pool first thing
+  (:func:`gnibench.suite.runs.executors.start`, before the experiment is read), and each worker
+  pays that (:func:`preload`) while the parent reads the experiment, opens the store and groups
+  the cells. Once the cells to compute are known the pool is fitted to them (:meth:`Pool.fit`:
+  idle workers beyond their number end, more are forked when ``-j`` asks for more than the
+  cores). The workers are children of the command, so a signal to it or its death ends them.
 * **One cell at a time per worker, by kernel, longest first.** Each worker has its own pipe and
   gets its next cell the moment it sends a result (before the parent stores it). The first cell
   of a kernel group runs alone (it compiles the kernel into the disk cache); once it is done, the
@@ -15,10 +16,12 @@ warm, and keep the kernels they loaded.
   worker takes a group not yet started (kernels compile in parallel), and only then helps with
   the largest group under way (it loads the kernel from the disk cache). Within a group the
   longest cells go first (:func:`longest_first`), so that short ones fill the end of the run.
-* **Quiet workers.** Workers ignore SIGINT (Ctrl-C reaches the whole process group: the parent
-  decides), end on SIGTERM and die with their parent; a worker reports the progress of a long
-  cell through its pipe. A worker that dies (killed, out of memory) fails the run with the cell it
-  was running.
+* **Quiet workers** (:func:`gnibench.suite.foundation.processes.quiet_worker`): SIGINT ignored
+  (Ctrl-C reaches the whole process group: the parent decides), SIGTERM ends them, they die with
+  their parent. A worker reports the progress of a long cell through its pipe. When the run ends
+  otherwise than by its last cell (Ctrl-C, SIGTERM, an error) the workers are terminated at once.
+  A worker that dies (killed, out of memory) ends the run with one line naming the cell it was
+  running (:class:`~gnibench.suite.foundation.outputs.Fault`); the cells stored so far stay.
 
 Which worker runs a cell never changes its numbers: the tables are assembled in cell order.
 """
@@ -27,24 +30,12 @@ from __future__ import annotations
 import contextlib
 import os
 import signal
-import socket
 from collections import deque
 
+from gnibench.suite.foundation.outputs import Fault
+from gnibench.suite.foundation.processes import quiet_worker
+
 POLL_SECONDS = 0.2
-
-
-def _quiet(parent: int) -> None:
-    """A worker's first act: SIGINT is the parent's business, SIGTERM ends it, and it dies with
-    its parent (Linux: PR_SET_PDEATHSIG)."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)
-    if hasattr(os, "sched_getaffinity"):
-        import ctypes
-
-        with contextlib.suppress(OSError, AttributeError):
-            ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL, 0, 0, 0)
-    if os.getppid() != parent:
-        os._exit(1)
 
 
 def preload() -> None:
@@ -64,18 +55,19 @@ def preload() -> None:
     cpu_target.target_context.refresh()
 
 
-def _serve(conn, parent: int) -> None:
+def _serve(conn, others: list, parent: int) -> None:
     """A worker: cells in, ("o", outcome) and ("p", cell id, fraction done) out, until None."""
+    quiet_worker(parent)
+    for other in others:                  # the parent's ends of the workers forked before
+        other.close()
     from gnibench.suite.runs.cellwork import install_reporter, run_cell
-
-    _quiet(parent)
 
     def report(cell_id: int, fraction: float) -> None:
         with contextlib.suppress(Exception):          # progress is best effort
             conn.send(("p", cell_id, fraction))
 
     install_reporter(report)
-    with contextlib.suppress(Exception):
+    with contextlib.suppress(Exception):              # a failed preload: the first cell says why
         preload()
     while True:
         try:
@@ -87,7 +79,7 @@ def _serve(conn, parent: int) -> None:
         conn.send(("o", run_cell(cell, frames=False)))
 
 
-def _child(target, *args) -> int:
+def _fork(target, *args) -> int:
     """Fork a process that runs ``target(*args)`` and exits; its pid in the parent."""
     pid = os.fork()
     if pid == 0:
@@ -95,183 +87,115 @@ def _child(target, *args) -> int:
         try:
             target(*args)
             code = 0
-        except Exception:  # noqa: BLE001 - a bug: said, then the parent hears of the death
+        except BaseException:  # noqa: BLE001 - a bug: said, then the parent hears of the death
             import traceback
 
-            traceback.print_exc()
+            with contextlib.suppress(Exception):
+                traceback.print_exc()
         finally:
             os._exit(code)
     return pid
 
 
-class Zygote:
-    """A process forked first thing that preloads (:func:`preload`) while its parent goes on, then
-    forks ready workers from itself on request (:meth:`workers`); Linux only (it passes the
-    workers' pipes by file descriptor)."""
-
-    def __init__(self):
-        self.pid, self.sock, self.forked = None, None, False
-
-    @staticmethod
-    def available() -> bool:
-        return hasattr(os, "fork") and hasattr(socket, "send_fds") and \
-            hasattr(os, "sched_getaffinity")
-
-    def start(self) -> Zygote:
-        ours, theirs = socket.socketpair(socket.AF_UNIX, socket.SOCK_DGRAM)
-        self.pid = _child(_zygote, theirs, ours, os.getpid())
-        theirs.close()
-        self.sock = ours
-        return self
-
-    def workers(self, n: int) -> list:
-        """``n`` worker connections (the workers are forked once the zygote is ready)."""
-        from multiprocessing import Pipe
-
-        pairs = [Pipe() for _ in range(n)]
-        socket.send_fds(self.sock, [b"fork"], [child.fileno() for _, child in pairs])
-        self.forked = True
-        for _, child in pairs:
-            child.close()
-        return [conn for conn, _ in pairs]
-
-    def stop(self, now: bool = False) -> None:
-        if self.pid is None:
-            return
-        with contextlib.suppress(OSError):
-            if now or not self.forked:                  # it may be preloading: no need to wait
-                os.kill(self.pid, signal.SIGTERM)       # its workers die with it (PDEATHSIG)
-            else:
-                self.sock.send(b"stop")
-        with contextlib.suppress(ChildProcessError):
-            os.waitpid(self.pid, 0)
-        self.sock.close()
-        self.pid = self.sock = None
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, kind, *exc) -> None:
-        self.stop(now=kind is not None)
-
-
-def _zygote(sock, other, parent: int) -> None:
-    from multiprocessing.connection import Connection
-
-    other.close()
-    _quiet(parent)
-    with contextlib.suppress(Exception):
-        preload()
-    children = []
-    while True:
-        try:
-            message, fds, _, _ = socket.recv_fds(sock, 16, 256)
-        except OSError:
-            break
-        if message != b"fork":
-            break
-        children += [_child(_worker_of_fd, fd, fds, sock, Connection) for fd in fds]
-        for fd in fds:
-            os.close(fd)
-    for pid in children:                # the workers end when their pipes close or say so
-        with contextlib.suppress(ChildProcessError):
-            os.waitpid(pid, 0)
-
-
-def _worker_of_pipe(conn, others: list, parent: int) -> None:
-    for other in others:                  # the parent's ends of the workers forked before
-        other.close()
-    _serve(conn, parent)
-
-
-def _worker_of_fd(fd: int, fds, sock, connection) -> None:
-    sock.close()
-    for other in fds:
-        if other != fd:
-            with contextlib.suppress(OSError):
-                os.close(other)
-    _serve(connection(fd), os.getppid())
-
-
 class Pool:
-    """``workers`` worker processes (see the module docstring), forked by ``zygote`` if one is
-    given, else from this process."""
+    """``workers`` worker processes forked from this one (see the module docstring)."""
 
-    def __init__(self, workers: int, zygote: Zygote | None = None):
-        self.size, self.zygote = workers, zygote
+    def __init__(self, workers: int):
+        self.size = workers
         self.conns: list = []
         self.pids: list[int] = []
-        self.used: set[int] = set()
 
     def start(self) -> Pool:
-        if self.zygote is not None:
-            self.conns = self.zygote.workers(self.size)
-            return self
+        """Fork the workers missing to reach ``size`` (they preload at once)."""
         from multiprocessing import Pipe
 
-        for _ in range(self.size):
+        while len(self.conns) < self.size:
             conn, child = Pipe()
-            self.pids.append(_child(_worker_of_pipe, child, list(self.conns), os.getpid()))
+            self.pids.append(_fork(_serve, child, list(self.conns), os.getpid()))
             child.close()
             self.conns.append(conn)
         return self
 
+    def fit(self, workers: int) -> Pool:
+        """``workers`` workers from now on: the extra ones end (they are idle), missing ones are
+        forked."""
+        workers = max(0, workers)
+        for conn, pid in zip(self.conns[workers:], self.pids[workers:]):
+            _end(conn, pid)
+        self.conns, self.pids = self.conns[:workers], self.pids[:workers]
+        self.size = workers
+        return self.start()
+
     def run(self, groups: list[list], progress=None):
         """Run the cells of ``groups`` (lists of cells sharing a kernel, in cell order) and yield
-        their outcomes as they finish; ``progress(cell_id, fraction)`` hears of long cells."""
+        their outcomes as they finish; ``progress(cell_id, fraction)`` hears of long cells. If the
+        caller stops early (an exception, Ctrl-C, ``close()``), the workers are terminated."""
         from multiprocessing.connection import wait
 
         from gnibench.suite.runs.cellwork import with_frame
 
         plan = Plan(groups)
         running: dict[int, object] = {}          # worker -> its cell
-        for w in range(self.size):
-            self._feed(w, plan, running)
-        while running:
-            for conn in wait([self.conns[w] for w in running], timeout=POLL_SECONDS):
-                w = self.conns.index(conn)
-                cell = running[w]
-                try:
-                    message = conn.recv()
-                except (EOFError, OSError):
-                    raise RuntimeError(f"a worker of the pool died while running cell {cell.id} "
-                                       f"({cell.problem} {cell.method})") from None
-                if message[0] == "p":
-                    if progress is not None:
-                        progress(message[1], message[2])
-                    continue
-                del running[w]
-                plan.done(cell)
-                for v in [w] + [v for v in range(self.size) if v != w]:
-                    if v not in running:
-                        self._feed(v, plan, running)
-                yield with_frame(message[1])
+        try:
+            for w in range(self.size):
+                self._feed(w, plan, running)
+            while running:
+                for conn in wait([self.conns[w] for w in running], timeout=POLL_SECONDS):
+                    w = self.conns.index(conn)
+                    cell = running[w]
+                    try:
+                        message = conn.recv()
+                    except (EOFError, OSError):
+                        raise self._died(w, cell) from None
+                    if message[0] == "p":
+                        if progress is not None:
+                            progress(message[1], message[2])
+                        continue
+                    del running[w]
+                    plan.done(cell)
+                    for v in [w] + [v for v in range(self.size) if v != w]:
+                        if v not in running:
+                            self._feed(v, plan, running)
+                    yield with_frame(message[1])
+        except BaseException:
+            self.stop(now=True)
+            raise
 
     def _feed(self, w: int, plan: Plan, running: dict) -> None:
         cell = plan.next_for(w)
         if cell is not None:
-            self.conns[w].send(cell)
+            try:
+                self.conns[w].send(cell)
+            except OSError:                       # it died while idle
+                raise self._died(w, cell) from None
             running[w] = cell
-            self.used.add(w)
+
+    def _died(self, w: int, cell) -> Fault:
+        how = ""
+        with contextlib.suppress(ChildProcessError, OSError):
+            pid, status = os.waitpid(self.pids[w], 0)
+            if pid and os.WIFSIGNALED(status):
+                how = f" (signal {signal.Signals(os.WTERMSIG(status)).name})"
+            elif pid and os.WIFEXITED(status):
+                how = f" (exit code {os.WEXITSTATUS(status)})"
+        return Fault(f"a worker of the pool died{how} while running cell {cell.id} "
+                     f"({cell.problem} {cell.method}); the cells finished so far are stored: run "
+                     f"the same command again to compute the rest")
 
     def stop(self, now: bool = False) -> None:
-        """Let the workers end (``now``: terminate them, e.g. on Ctrl-C or an error; a worker
-        that never got a cell is terminated too: it may still be preloading)."""
-        for w, conn in enumerate(self.conns):
-            if not now and w in self.used:
-                with contextlib.suppress(OSError, ValueError):
-                    conn.send(None)
-        for w, pid in enumerate(self.pids):
-            if now or w not in self.used:
+        """End the workers: ``now`` terminates them (Ctrl-C, an error), else they are told to end
+        once idle."""
+        for conn, pid in zip(self.conns, self.pids):
+            if now:
                 with contextlib.suppress(OSError):
                     os.kill(pid, signal.SIGTERM)
-        for pid in self.pids:
+            else:
+                with contextlib.suppress(OSError, ValueError):
+                    conn.send(None)
+        for conn, pid in zip(self.conns, self.pids):
             with contextlib.suppress(ChildProcessError):
                 os.waitpid(pid, 0)
-        for conn in self.conns:
-            conn.close()                        # a zygote's idle workers end on this
-        if now and self.zygote is not None:
-            self.zygote.stop(now=True)
+            conn.close()
         self.conns, self.pids = [], []
 
     def __enter__(self):
@@ -279,6 +203,15 @@ class Pool:
 
     def __exit__(self, kind, *exc) -> None:
         self.stop(now=kind is not None)
+
+
+def _end(conn, pid: int) -> None:
+    """End an idle worker (it may still be preloading: terminated, not waited for)."""
+    with contextlib.suppress(OSError):
+        os.kill(pid, signal.SIGTERM)
+    with contextlib.suppress(ChildProcessError):
+        os.waitpid(pid, 0)
+    conn.close()
 
 
 def _planned_steps(cell) -> int:

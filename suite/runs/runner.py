@@ -58,7 +58,7 @@ FLUSH_SECONDS = 5.0
 def run_experiment(name_or_path, out_dir=None, *, jobs: int | None = None,
                    executor: str = "local", scheduler: str | None = None, fresh: bool = False,
                    log=None, summarize=None, scale: str = "paper", started=None,
-                   zygote=None) -> Path:
+                   pool=None) -> Path:
     """Run an experiment (shipped name or TOML path); return the output directory.
 
     Parameters
@@ -84,9 +84,11 @@ def run_experiment(name_or_path, out_dir=None, *, jobs: int | None = None,
     started:
         Called once the experiment and the executor options are valid, before anything is
         written (the command line starts the report's drawing process there).
-    zygote:
-        A started :class:`~gnibench.suite.runs.pool.Zygote` that forks the local pool's workers
-        (the command line starts one first thing); default: they are forked from this process.
+    pool:
+        A local pool already started (:func:`gnibench.suite.runs.executors.start`; the command
+        line starts it first thing, so that its workers get ready while the experiment is read),
+        fitted to the cells to compute and used for them; the caller stops it. Default: one is
+        started here when needed.
     """
     experiment = load_experiment(name_or_path, scale)
     executors.check(executor, jobs, scheduler)
@@ -95,23 +97,24 @@ def run_experiment(name_or_path, out_dir=None, *, jobs: int | None = None,
     out = Path(out_dir) if out_dir is not None else Path("results") / experiment.name
     run_experiments([experiment], [out], out, jobs=jobs, executor=executor, scheduler=scheduler,
                     fresh=fresh, log=log, summarize=summarize, name=experiment.name,
-                    zygote=zygote)
+                    pool=pool)
     return out
 
 
 def run_experiments(experiments: list[Experiment], outs: list[Path], store_root: Path, *,
                     jobs: int | None = None, executor: str = "local",
                     scheduler: str | None = None, fresh: bool = False, log=None,
-                    summarize=None, name: str = "run", zygote=None) -> list[Path]:
+                    summarize=None, name: str = "run", pool=None) -> list[Path]:
     """Run several validated experiments over one store: a cell shared by several experiments
     (same key) is computed once; each experiment's tables are consolidated into its own
     directory (``outs``, in order). Executor options must have been checked."""
     log = sys.stderr if log is None else log
     outs = [Path(o) for o in outs]
-    # the workers get ready while the store is read and the cells are grouped
-    pool = executors.start(executor, jobs, len({id(c) for e in experiments for c in e.cells}),
-                           zygote)
-    with pool if pool is not None else contextlib.nullcontext(), Store(store_root) as store:
+    own = None
+    if pool is None:            # the workers get ready while the store is read
+        pool = own = executors.start(executor, jobs,
+                                     len({id(c) for e in experiments for c in e.cells}))
+    with own if own is not None else contextlib.nullcontext(), Store(store_root) as store:
         for out in outs:
             Store.make_output_dir(out)
         writers = [Consolidator(e, store, out, summarize) for e, out in zip(experiments, outs)]
@@ -122,6 +125,8 @@ def run_experiments(experiments: list[Experiment], outs: list[Path], store_root:
         done = set() if fresh else {k for k in unique if store.read(k)}
         todo = [c for k, c in unique.items() if k not in done]
         key_of = {id(c): k for k, c in unique.items()}
+        if pool is not None:
+            pool.fit(executors.workers(jobs, len(todo)))
         where = outs[0] if len(outs) == 1 else store_root
         print(f"gnibench: {name}: {len(unique)} cells -> {where} ({len(done)} reused from the "
               f"store, {len(todo)} to compute)", file=log, flush=True)
