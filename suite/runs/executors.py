@@ -81,25 +81,27 @@ def start(executor: str, jobs: int | None, cells: int | None = None):
 def run(groups: list[list], executor: str = "local", jobs: int | None = None,
         scheduler: str | None = None, progress: Progress | None = None,
         pool=None) -> Iterator[CellOutcome]:
-    """Run the cells of ``groups`` and yield their outcomes as they finish (``pool``: the local
-    pool of :func:`start`, else one is started here when needed)."""
+    """Run the cells of ``groups``: an iterator of their outcomes as they finish (``pool``: the
+    local pool of :func:`start`, whose workers get their first cells at once; else one is started
+    here when needed)."""
     total = sum(len(g) for g in groups)
     jobs = max(1, workers(jobs, total))
     if executor == "dask":
-        yield from _dask(groups, jobs, scheduler)
-    elif total == 0:
-        return
-    elif pool is not None:
-        yield from pool.run(groups, progress)
-    elif jobs == 1 or total <= 1:
+        return _dask(groups, jobs, scheduler)
+    if pool is not None and total:
+        return pool.run(groups, progress)
+    if jobs == 1 or total <= 1:
+        return _serial(groups, progress)
+    return _own_pool(groups, executor, jobs, total, progress)
+
+
+def _own_pool(groups, executor, jobs, total, progress) -> Iterator[CellOutcome]:
+    own = start(executor, jobs, total)
+    if own is None:
         yield from _serial(groups, progress)
-    else:
-        own = start(executor, jobs, total)
-        if own is None:
-            yield from _serial(groups, progress)
-            return
-        with own:
-            yield from own.run(groups, progress)
+        return
+    with own:
+        yield from own.run(groups, progress)
 
 
 def _serial(groups, progress) -> Iterator[CellOutcome]:

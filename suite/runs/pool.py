@@ -9,8 +9,10 @@ and keep the kernels they loaded.
   the cells. Once the cells to compute are known the pool is fitted to them (:meth:`Pool.fit`:
   idle workers beyond their number end, more are forked when ``-j`` asks for more than the
   cores). The workers are children of the command, so a signal to it or its death ends them.
-* **One cell at a time per worker, by kernel, longest first.** Each worker has its own pipe and
-  gets its next cell the moment it sends a result (before the parent stores it). The first cell
+* **By kernel, longest first, one cell queued ahead.** Each worker has its own pipe and holds
+  the cell it runs and the next one (while there are cells enough for all workers), so that it
+  never waits for the parent (busy storing a result, or not scheduled on a loaded machine)
+  between two cells. The first cell
   of a kernel group runs alone (it compiles the kernel into the disk cache); once it is done, the
   rest of the group goes preferably to the worker that ran it (the kernel is loaded there), a free
   worker takes a group not yet started (kernels compile in parallel), and only then helps with
@@ -36,6 +38,7 @@ from gnibench.suite.foundation.outputs import Fault
 from gnibench.suite.foundation.processes import quiet_worker
 
 POLL_SECONDS = 0.2
+AHEAD = 2                 # cells sent to a worker at a time: the one it runs and the next
 
 
 def preload() -> None:
@@ -104,6 +107,7 @@ class Pool:
         self.size = workers
         self.conns: list = []
         self.pids: list[int] = []
+        self.plan, self.sent = None, {}
 
     def start(self) -> Pool:
         """Fork the workers missing to reach ``size`` (they preload at once)."""
@@ -127,48 +131,58 @@ class Pool:
         return self.start()
 
     def run(self, groups: list[list], progress=None):
-        """Run the cells of ``groups`` (lists of cells sharing a kernel, in cell order) and yield
-        their outcomes as they finish; ``progress(cell_id, fraction)`` hears of long cells. If the
-        caller stops early (an exception, Ctrl-C, ``close()``), the workers are terminated."""
+        """Run the cells of ``groups`` (lists of cells sharing a kernel, in cell order): the first
+        cells go to the workers now, and the iterator returned yields the outcomes as they
+        finish; ``progress(cell_id, fraction)`` hears of long cells. If the caller stops early
+        (an exception, Ctrl-C, ``close()``), the workers are terminated."""
+        self.plan = Plan(groups)
+        self.sent = {w: deque() for w in range(self.size)}     # worker -> its cells, in order
+        try:
+            self._top_up(0)
+        except BaseException:
+            self.stop(now=True)
+            raise
+        return self._outcomes(progress)
+
+    def _outcomes(self, progress):
         from multiprocessing.connection import wait
 
         from gnibench.suite.runs.cellwork import with_frame
 
-        plan = Plan(groups)
-        running: dict[int, object] = {}          # worker -> its cell
         try:
-            for w in range(self.size):
-                self._feed(w, plan, running)
-            while running:
-                for conn in wait([self.conns[w] for w in running], timeout=POLL_SECONDS):
+            while busy := [w for w, cells in self.sent.items() if cells]:
+                for conn in wait([self.conns[w] for w in busy], timeout=POLL_SECONDS):
                     w = self.conns.index(conn)
-                    cell = running[w]
                     try:
                         message = conn.recv()
                     except (EOFError, OSError):
-                        raise self._died(w, cell) from None
+                        raise self._died(w, self.sent[w][0]) from None
                     if message[0] == "p":
                         if progress is not None:
                             progress(message[1], message[2])
                         continue
-                    del running[w]
-                    plan.done(cell)
-                    for v in [w] + [v for v in range(self.size) if v != w]:
-                        if v not in running:
-                            self._feed(v, plan, running)
+                    self.plan.done(self.sent[w].popleft())
+                    self._top_up(w)
                     yield with_frame(message[1])
         except BaseException:
             self.stop(now=True)
             raise
 
-    def _feed(self, w: int, plan: Plan, running: dict) -> None:
-        cell = plan.next_for(w)
-        if cell is not None:
-            try:
-                self.conns[w].send(cell)
-            except OSError:                       # it died while idle
-                raise self._died(w, cell) from None
-            running[w] = cell
+    def _top_up(self, first: int) -> None:
+        """Give every worker (``first`` first) a cell to run and, while there are cells enough
+        for all, one queued behind it (so that a worker never waits for this process between
+        two cells; near the end the last cells go to whoever is free)."""
+        for w in [first] + [v for v in range(self.size) if v != first]:
+            cells = self.sent[w]
+            while len(cells) < (AHEAD if self.plan.left >= self.size else 1):
+                cell = self.plan.next_for(w)
+                if cell is None:
+                    break
+                try:
+                    self.conns[w].send(cell)
+                except OSError:                       # it died while idle
+                    raise self._died(w, cells[0] if cells else cell) from None
+                cells.append(cell)
 
     def _died(self, w: int, cell) -> Fault:
         how = ""
@@ -237,8 +251,15 @@ class Plan:
         self.open: list[deque] = []                          # compiled, cells left
         self.compiling: dict[int, deque] = {}                # id(first cell) -> rest of its group
         self.home: dict[int, deque] = {}                     # worker -> the group it loaded
+        self.left = sum(len(g) for g in groups)              # cells not handed out yet
 
     def next_for(self, w: int):
+        cell = self._next_for(w)
+        if cell is not None:
+            self.left -= 1
+        return cell
+
+    def _next_for(self, w: int):
         group = self.home.get(w)
         if group:                                             # its kernel is loaded here
             return group.popleft()

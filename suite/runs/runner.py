@@ -117,11 +117,11 @@ def run_experiments(experiments: list[Experiment], outs: list[Path], store_root:
     with own if own is not None else contextlib.nullcontext(), Store(store_root) as store:
         for out in outs:
             Store.make_output_dir(out)
-        writers = [Consolidator(e, store, out, summarize) for e, out in zip(experiments, outs)]
+        keys = [{c.id: cell_key(c) for c in e.cells} for e in experiments]
         unique: dict[str, object] = {}
-        for w in writers:
-            for c in w.experiment.cells:
-                unique.setdefault(w.keys[c.id], c)
+        for e, k in zip(experiments, keys):
+            for c in e.cells:
+                unique.setdefault(k[c.id], c)
         done = set() if fresh else {k for k in unique if store.read(k)}
         todo = [c for k, c in unique.items() if k not in done]
         key_of = {id(c): k for k, c in unique.items()}
@@ -131,10 +131,14 @@ def run_experiments(experiments: list[Experiment], outs: list[Path], store_root:
         print(f"gnibench: {name}: {len(unique)} cells -> {where} ({len(done)} reused from the "
               f"store, {len(todo)} to compute)", file=log, flush=True)
         progress = RunProgress(len(unique), len(done), log, name)
+        # the pool's workers get their first cells now; the tables' writers are made meanwhile
         outcomes = executors.run(_groups(todo), executor, jobs, scheduler, progress.cell_progress,
                                  pool)
+        writers: list[Consolidator] = []
         try:
             with contextlib.closing(outcomes):      # an error stops the workers at once
+                writers += [Consolidator(e, store, out, summarize, k)
+                            for e, out, k in zip(experiments, outs, keys)]
                 for outcome in outcomes:
                     key = key_of.get(id(outcome.cell)) or cell_key(outcome.cell)
                     store.write(key, _part(outcome), writers[0].empty_samples)
@@ -180,11 +184,12 @@ def _part(o: CellOutcome) -> Part:
 class Consolidator:
     """Writes the consolidated tables (and the summary) from the stored parts."""
 
-    def __init__(self, experiment: Experiment, store: Store, out: Path, summarize=None):
+    def __init__(self, experiment: Experiment, store: Store, out: Path, summarize=None,
+                 keys: dict | None = None):
         from gnibench.suite.runs.tables import samples_table
 
         self.experiment, self.store, self.out, self.summarize = experiment, store, out, summarize
-        self.keys = {c.id: cell_key(c) for c in experiment.cells}
+        self.keys = keys if keys is not None else {c.id: cell_key(c) for c in experiment.cells}
         self.key_set = set(self.keys.values())
         self.dirty = False          # a cell of this experiment finished since the last write
         self.state_names = experiment_states(experiment)
