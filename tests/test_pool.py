@@ -101,7 +101,8 @@ def test_pool_runs_every_cell_once_and_leaves_nothing():
     before = _children()
     todo = cells()
     with Pool(2).start() as p:
-        assert len(_children() - before) == 2                  # forked before the cells are known
+        assert set(p.started()) == _children() - before        # forked before the cells are known
+        assert len(p.started()) == 2
         outcomes = list(p.run(_groups(todo)))
     assert sorted(o.cell.id for o in outcomes) == [c.id for c in todo]
     assert all(o.status == "ok" and isinstance(o.samples, pd.DataFrame) for o in outcomes)
@@ -112,15 +113,16 @@ def test_pool_runs_every_cell_once_and_leaves_nothing():
 def test_fit_ends_the_idle_workers_beyond_the_cells_and_forks_the_missing_ones():
     before = _children()
     with Pool(2).start() as p:
-        first = _children() - before
+        first = p.started()
         p.fit(1)
-        assert len(_children() - before) == 1 and (_children() - before) < first
+        assert p.started() == first[:1]
         p.fit(3)
-        assert len(_children() - before) == 3
+        assert len(p.started()) == 3 and p.started()[0] == first[0]
+        assert set(p.started()) <= _children()
         outcomes = list(p.run(_groups(cells())))
         assert sorted(o.cell.id for o in outcomes) == list(range(6))
         p.fit(0)
-        assert _children() == before
+        assert p.started() == []
     assert _children() == before
 
 
@@ -130,7 +132,7 @@ def test_a_worker_ignores_sigint_and_ends_on_sigterm():
     before = _children()
     todo = cells()
     with Pool(1).start() as p:
-        (worker,) = _children() - before
+        (worker,) = p.started()
         assert [o.status for o in p.run(_groups(todo[:1]))] == ["ok"]   # its handlers are set
         os.kill(worker, signal.SIGINT)
         assert [o.status for o in p.run(_groups(todo[1:2]))] == ["ok"]  # still serving
@@ -168,4 +170,13 @@ def test_a_dead_worker_fails_the_run_with_its_cell(monkeypatch):
     died = r"died \(exit code 3\) while running cell 4"
     with pytest.raises(Fault, match=died), Pool(2).start() as p:
         list(p.run(_groups(cells())))
+    assert _children() == before
+
+
+@LINUX
+@pytest.mark.parametrize("now", [True, False])
+def test_a_pool_stopped_at_once_leaves_nothing(now):
+    """Stopped whatever its first worker is doing (preloading, forking the others)."""
+    before = _children()
+    Pool(3).start().stop(now=now)
     assert _children() == before

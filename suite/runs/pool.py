@@ -32,12 +32,16 @@ from __future__ import annotations
 import contextlib
 import os
 import signal
+import sys
+import time
 from collections import deque
 
 from gnibench.suite.foundation.outputs import Fault
 from gnibench.suite.foundation.processes import quiet_worker
 
 POLL_SECONDS = 0.2
+PR_SET_CHILD_SUBREAPER = 36
+SAFETY_SECONDS = 600.0    # a forked worker says its pid within this (a hang only reaches it)
 AHEAD = 2                 # cells sent to a worker at a time: the one it runs and the next
 
 
@@ -58,10 +62,11 @@ def preload() -> None:
     cpu_target.target_context.refresh()
 
 
-def _serve(conn, others: list, parent: int) -> None:
-    """A worker: cells in, ("o", outcome) and ("p", cell id, fraction done) out, until None."""
+def _serve(conn, others: list, parent: int, ready: bool = False) -> None:
+    """A worker: cells in, ("o", outcome) and ("p", cell id, fraction done) out, until None
+    (``ready``: forked from a worker that preloaded)."""
     quiet_worker(parent)
-    for other in others:                  # the parent's ends of the workers forked before
+    for other in others:                  # the other ends of the pipes it does not serve
         other.close()
     from gnibench.suite.runs.cellwork import install_reporter, run_cell
 
@@ -70,8 +75,9 @@ def _serve(conn, others: list, parent: int) -> None:
             conn.send(("p", cell_id, fraction))
 
     install_reporter(report)
-    with contextlib.suppress(Exception):              # a failed preload: the first cell says why
-        preload()
+    if not ready:
+        with contextlib.suppress(Exception):          # a failed preload: the first cell says why
+            preload()
     while True:
         try:
             cell = conn.recv()
@@ -80,6 +86,49 @@ def _serve(conn, others: list, parent: int) -> None:
         if cell is None:
             return
         conn.send(("o", run_cell(cell, frames=False)))
+
+
+def _first(mine, rest: list, others: list, parent: int) -> None:
+    """The first worker of a batch: it preloads, forks the rest of the batch from itself (ready at
+    once; each through a short-lived middle process, so that the command adopts it), then serves.
+    """
+    quiet_worker(parent)
+    for other in others:
+        other.close()
+    with contextlib.suppress(Exception):
+        preload()
+    for child in rest:
+        middle = _fork(_adopted, child, [mine] + [c for c in rest if c is not child], parent)
+        with contextlib.suppress(ChildProcessError):
+            os.waitpid(middle, 0)
+        child.close()
+    _serve(mine, [], parent, ready=True)
+
+
+def _adopted(conn, others: list, parent: int) -> None:
+    """In the middle process: fork the worker and end, so that the worker is adopted by the
+    command (its child subreaper); the worker says its pid first."""
+    if os.fork():
+        os._exit(0)
+    middle = os.getppid()
+    while middle != parent and os.getppid() == middle:    # the middle process is ending
+        time.sleep(0.001)
+    quiet_worker(parent)                                  # adopted by another: it ends here
+    conn.send(("pid", os.getpid()))
+    _serve(conn, others, parent, ready=True)
+
+
+def _subreaper(on: bool) -> bool:
+    """Make this process the adopter of its orphaned descendants (Linux); whether it is."""
+    if not sys.platform.startswith("linux"):
+        return False
+    import ctypes
+
+    try:
+        return ctypes.CDLL(None, use_errno=True).prctl(PR_SET_CHILD_SUBREAPER, int(on), 0, 0,
+                                                       0) == 0
+    except (OSError, AttributeError):
+        return False
 
 
 def _fork(target, *args) -> int:
@@ -106,26 +155,57 @@ class Pool:
     def __init__(self, workers: int):
         self.size = workers
         self.conns: list = []
-        self.pids: list[int] = []
+        self.pids: list[int | None] = []         # None: adopted, its pid not heard yet
+        self.leaving: list = []                   # (conn, pid) of workers told to end
         self.plan, self.sent = None, {}
+        self.reaping = False
 
     def start(self) -> Pool:
-        """Fork the workers missing to reach ``size`` (they preload at once)."""
+        """Fork the workers missing to reach ``size``: one that preloads and then forks the
+        others from itself (Linux: this process adopts them), else each one preloading."""
         from multiprocessing import Pipe
 
-        while len(self.conns) < self.size:
-            conn, child = Pipe()
-            self.pids.append(_fork(_serve, child, list(self.conns), os.getpid()))
+        missing = self.size - len(self.conns)
+        if missing <= 0:
+            return self
+        pairs = [Pipe() for _ in range(missing)]
+        theirs = [child for _, child in pairs]
+        ours = [conn for conn, _ in pairs]
+        if missing >= 2 and (self.reaping or _subreaper(True)):
+            self.reaping = True
+            pid = _fork(_first, theirs[0], theirs[1:], self.conns + ours, os.getpid())
+            self.pids += [pid] + [None] * (missing - 1)
+        else:
+            for k, child in enumerate(theirs):
+                others = self.conns + ours + theirs[:k] + theirs[k + 1:]
+                self.pids.append(_fork(_serve, child, others, os.getpid()))
+        for child in theirs:
             child.close()
-            self.conns.append(conn)
+        self.conns += ours
         return self
+
+    def started(self) -> list[int]:
+        """The workers' pids (waiting for the adopted ones to say theirs)."""
+        for w in range(len(self.conns)):
+            self._pid(w, SAFETY_SECONDS)
+        return [p for p in self.pids if p is not None]
+
+    def _pid(self, w: int, wait: float) -> int | None:
+        if self.pids[w] is None:
+            self.pids[w] = _read_pid(self.conns[w], wait)
+        return self.pids[w]
 
     def fit(self, workers: int) -> Pool:
         """``workers`` workers from now on: the extra ones end (they are idle), missing ones are
         forked."""
         workers = max(0, workers)
         for conn, pid in zip(self.conns[workers:], self.pids[workers:]):
-            _end(conn, pid)
+            if pid is not None:                   # it may be preloading: no need to wait
+                _kill(pid)
+            else:                                 # adopted: it ends once it reads this
+                with contextlib.suppress(OSError, ValueError):
+                    conn.send(None)
+            self.leaving.append((conn, pid))
         self.conns, self.pids = self.conns[:workers], self.pids[:workers]
         self.size = workers
         return self.start()
@@ -157,6 +237,9 @@ class Pool:
                         message = conn.recv()
                     except (EOFError, OSError):
                         raise self._died(w, self.sent[w][0]) from None
+                    if message[0] == "pid":
+                        self.pids[w] = message[1]
+                        continue
                     if message[0] == "p":
                         if progress is not None:
                             progress(message[1], message[2])
@@ -186,8 +269,8 @@ class Pool:
 
     def _died(self, w: int, cell) -> Fault:
         how = ""
-        with contextlib.suppress(ChildProcessError, OSError):
-            pid, status = os.waitpid(self.pids[w], 0)
+        with contextlib.suppress(ChildProcessError, OSError, TypeError):
+            pid, status = os.waitpid(self._pid(w, 0.0), 0)
             if pid and os.WIFSIGNALED(status):
                 how = f" (signal {signal.Signals(os.WTERMSIG(status)).name})"
             elif pid and os.WIFEXITED(status):
@@ -198,19 +281,30 @@ class Pool:
 
     def stop(self, now: bool = False) -> None:
         """End the workers: ``now`` terminates them (Ctrl-C, an error), else they are told to end
-        once idle."""
-        for conn, pid in zip(self.conns, self.pids):
-            if now:
-                with contextlib.suppress(OSError):
-                    os.kill(pid, signal.SIGTERM)
-            else:
+        once idle. Adopted workers not heard of yet are waited for (they were forked or will
+        never be: their pipe then closes)."""
+        every = list(zip(self.conns, self.pids)) + self.leaving
+        if now:
+            for _, pid in every:                  # the first of a batch first: it forks no more
+                if pid is not None:
+                    _kill(pid)
+        else:
+            for conn in self.conns:
                 with contextlib.suppress(OSError, ValueError):
                     conn.send(None)
-        for conn, pid in zip(self.conns, self.pids):
-            with contextlib.suppress(ChildProcessError):
-                os.waitpid(pid, 0)
+        for conn, pid in every:
+            if pid is None:
+                pid = _read_pid(conn, SAFETY_SECONDS)
+                if pid is not None and now:
+                    _kill(pid)
+            if pid is not None:
+                with contextlib.suppress(ChildProcessError):
+                    os.waitpid(pid, 0)
             conn.close()
-        self.conns, self.pids = [], []
+        self.conns, self.pids, self.leaving = [], [], []
+        if self.reaping:
+            _subreaper(False)
+            self.reaping = False
 
     def __enter__(self):
         return self
@@ -219,13 +313,21 @@ class Pool:
         self.stop(now=kind is not None)
 
 
-def _end(conn, pid: int) -> None:
-    """End an idle worker (it may still be preloading: terminated, not waited for)."""
+def _kill(pid: int) -> None:
     with contextlib.suppress(OSError):
         os.kill(pid, signal.SIGTERM)
-    with contextlib.suppress(ChildProcessError):
-        os.waitpid(pid, 0)
-    conn.close()
+
+
+def _read_pid(conn, wait: float) -> int | None:
+    """The pid an adopted worker sends first, or None if its pipe closed (never forked)."""
+    try:
+        if conn.poll(wait):
+            message = conn.recv()
+            if message[0] == "pid":
+                return message[1]
+    except (EOFError, OSError):
+        pass
+    return None
 
 
 def _planned_steps(cell) -> int:
