@@ -222,10 +222,11 @@ def _list(a) -> int:
 
 
 def _run(a) -> int:
-    from gnibench.suite.runs import executors
+    from gnibench.suite.runs.pool import start
 
-    # first: the pool's workers get ready (numba) while the experiment is read (-j 1, Dask: None)
-    with executors.start(a.executor, a.jobs) or contextlib.nullcontext() as pool:
+    # first: the pool's workers get ready (numba) while the experiment is read (-j 1, Dask: none)
+    early = start(a.jobs) if a.executor == "local" else None
+    with early or contextlib.nullcontext() as pool:
         return _run_with(a, pool)
 
 

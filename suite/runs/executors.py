@@ -18,23 +18,16 @@ kernels run in parallel.
 """
 from __future__ import annotations
 
-import os
 import signal
 from collections.abc import Callable, Iterator
 
 from gnibench.suite.foundation.errors import UserError
 from gnibench.suite.runs.cellwork import CellOutcome, run_cell
+from gnibench.suite.runs.pool import default_jobs, workers  # noqa: F401 - part of this interface
 
 EXECUTORS = ("local", "dask")
 
 Progress = Callable[[int, float], None]
-
-
-def default_jobs() -> int:
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:                       # not on Linux
-        return os.cpu_count() or 1
 
 
 def check(executor: str, jobs: int | None, scheduler: str | None) -> None:
@@ -61,21 +54,14 @@ def check(executor: str, jobs: int | None, scheduler: str | None) -> None:
         probe(scheduler)
 
 
-def workers(jobs: int | None, cells: int) -> int:
-    """How many workers ``-j jobs`` gives ``cells`` cells (-j 1000 for 6 cells: 6 processes)."""
-    return max(0, min(jobs or default_jobs(), cells))
-
-
 def start(executor: str, jobs: int | None, cells: int | None = None):
-    """The local pool, started now (its workers get ready while the caller prepares the cells;
-    :mod:`gnibench.suite.runs.pool`), or None where none is needed (serial, Dask, a single cell,
-    no fork). ``cells`` unknown: at most one worker per core for now (see ``Pool.fit``)."""
-    n = workers(jobs, default_jobs() if cells is None else cells)
-    if executor != "local" or n < 2 or not hasattr(os, "fork"):
+    """The local pool, started now, or None where none is needed (serial, Dask, a single cell,
+    no fork): :func:`gnibench.suite.runs.pool.start`."""
+    if executor != "local":
         return None
-    from gnibench.suite.runs.pool import Pool
+    from gnibench.suite.runs.pool import start as start_pool
 
-    return Pool(n).start()
+    return start_pool(jobs, cells)
 
 
 def run(groups: list[list], executor: str = "local", jobs: int | None = None,

@@ -4,9 +4,9 @@ and keep the kernels they loaded.
 * **Ready early.** A fresh process pays about half a second before its first cell: numba and
   numba's CPU target (its typing and lowering registries); pandas it never needs (the samples
   travel as arrays, the parent makes the table). ``gnibench run`` starts the pool first thing
-  (:func:`gnibench.suite.runs.executors.start`, before the experiment is read), and each worker
-  pays that (:func:`preload`) while the parent reads the experiment, opens the store and groups
-  the cells. Once the cells to compute are known the pool is fitted to them (:meth:`Pool.fit`:
+  (:func:`start`, before the experiment is read): its first worker pays that once
+  (:func:`preload`) while the parent reads the experiment, opens the store and groups the cells,
+  then forks the others from itself, ready at once. Once the cells to compute are known the pool is fitted to them (:meth:`Pool.fit`:
   idle workers beyond their number end, more are forked when ``-j`` asks for more than the
   cores). The workers are children of the command, so a signal to it or its death ends them.
 * **By kernel, longest first, one cell queued ahead.** Each worker has its own pipe and holds
@@ -43,6 +43,29 @@ POLL_SECONDS = 0.2
 PR_SET_CHILD_SUBREAPER = 36
 SAFETY_SECONDS = 600.0    # a forked worker says its pid within this (a hang only reaches it)
 AHEAD = 2                 # cells sent to a worker at a time: the one it runs and the next
+
+
+def default_jobs() -> int:
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:                       # not on Linux
+        return os.cpu_count() or 1
+
+
+def workers(jobs: int | None, cells: int) -> int:
+    """How many workers ``-j jobs`` gives ``cells`` cells (-j 1000 for 6 cells: 6 processes)."""
+    return max(0, min(jobs or default_jobs(), cells))
+
+
+def start(jobs: int | None, cells: int | None = None) -> Pool | None:
+    """A pool started now (its workers get ready while the caller prepares the cells), or None
+    where none is needed (one worker: serial; no fork). ``cells`` unknown: at most one worker per
+    core for now (see :meth:`Pool.fit`). This module imports little (not numpy), so the command
+    forks the first worker early."""
+    n = workers(jobs, default_jobs() if cells is None else cells)
+    if n < 2 or not hasattr(os, "fork"):
+        return None
+    return Pool(n).start()
 
 
 def preload() -> None:
