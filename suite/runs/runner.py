@@ -142,6 +142,9 @@ def run_experiments(experiments: list[Experiment], outs: list[Path], store_root:
                 for outcome in outcomes:
                     key = key_of.get(id(outcome.cell)) or cell_key(outcome.cell)
                     store.write(key, _part(outcome), writers[0].empty_samples)
+                    # read back (verified) while the workers go on: the tables at the end are
+                    # made from the disk's parts without waiting for the disk
+                    store.read(key)
                     done.add(key)
                     progress.cell_done(outcome)
                     for w in writers:      # only the experiments that hold the cell have news
