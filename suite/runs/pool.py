@@ -162,12 +162,12 @@ def _fork(target, *args) -> int:
         try:
             target(*args)
             code = 0
-        except BaseException:  # noqa: BLE001 - a bug: said, then the parent hears of the death
+        except Exception:  # noqa: BLE001 - a bug: said, then the parent hears of the death
             import traceback
 
             with contextlib.suppress(Exception):
                 traceback.print_exc()
-        finally:
+        finally:                          # never back into the caller's code (a signal: quietly)
             os._exit(code)
     return pid
 
