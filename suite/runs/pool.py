@@ -42,6 +42,8 @@ from gnibench.suite.foundation.processes import quiet_worker
 POLL_SECONDS = 0.2
 PR_SET_CHILD_SUBREAPER = 36
 SAFETY_SECONDS = 600.0    # a forked worker says its pid within this (a hang only reaches it)
+GONE = 0                  # the pid of a worker already reaped
+BLOCKED = {signal.SIGINT, signal.SIGTERM}
 AHEAD = 2                 # cells sent to a worker at a time: the one it runs and the next
 
 
@@ -88,7 +90,7 @@ def preload() -> None:
 def _serve(conn, others: list, parent: int, ready: bool = False) -> None:
     """A worker: cells in, ("o", outcome) and ("p", cell id, fraction done) out, until None
     (``ready``: forked from a worker that preloaded)."""
-    quiet_worker(parent)
+    _quiet(parent)
     for other in others:                  # the other ends of the pipes it does not serve
         other.close()
     from gnibench.suite.runs.cellwork import install_reporter, run_cell
@@ -115,7 +117,7 @@ def _first(mine, rest: list, others: list, parent: int) -> None:
     """The first worker of a batch: it preloads, forks the rest of the batch from itself (ready at
     once; each through a short-lived middle process, so that the command adopts it), then serves.
     """
-    quiet_worker(parent)
+    _quiet(parent)
     for other in others:
         other.close()
     with contextlib.suppress(Exception):
@@ -136,7 +138,7 @@ def _adopted(conn, others: list, parent: int) -> None:
     middle = os.getppid()
     while middle != parent and os.getppid() == middle:    # the middle process is ending
         time.sleep(0.001)
-    quiet_worker(parent)                                  # adopted by another: it ends here
+    _quiet(parent)                                        # adopted by another: it ends here
     conn.send(("pid", os.getpid()))
     _serve(conn, others, parent, ready=True)
 
@@ -154,9 +156,24 @@ def _subreaper(on: bool) -> bool:
         return False
 
 
+def _quiet(parent: int) -> None:
+    """The shared worker policy, then the signals blocked across the fork are let in."""
+    quiet_worker(parent)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, BLOCKED)
+
+
 def _fork(target, *args) -> int:
-    """Fork a process that runs ``target(*args)`` and exits; its pid in the parent."""
-    pid = os.fork()
+    """Fork a process that runs ``target(*args)`` and exits; its pid in the parent. SIGINT and
+    SIGTERM are blocked across the fork until the child has its own dispositions (:func:`_quiet`):
+    a signal in its first instant would otherwise run the parent's handler there, which writes to
+    the parent's wakeup fd (gnibench.suite.cli.signals) and ends the parent."""
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, BLOCKED)
+    pid = -1
+    try:
+        pid = os.fork()
+    finally:
+        if pid != 0:
+            signal.pthread_sigmask(signal.SIG_SETMASK, previous)
     if pid == 0:
         code = 1
         try:
@@ -178,7 +195,7 @@ class Pool:
     def __init__(self, workers: int):
         self.size = workers
         self.conns: list = []
-        self.pids: list[int | None] = []         # None: adopted, its pid not heard yet
+        self.pids: list[int | None] = []         # None: adopted, its pid not heard yet; GONE
         self.leaving: list = []                   # (conn, pid) of workers told to end
         self.plan, self.sent = None, {}
         self.reaping = False
@@ -211,7 +228,7 @@ class Pool:
         """The workers' pids (waiting for the adopted ones to say theirs)."""
         for w in range(len(self.conns)):
             self._pid(w, SAFETY_SECONDS)
-        return [p for p in self.pids if p is not None]
+        return [p for p in self.pids if p]
 
     def _pid(self, w: int, wait: float) -> int | None:
         if self.pids[w] is None:
@@ -223,7 +240,7 @@ class Pool:
         forked."""
         workers = max(0, workers)
         for conn, pid in zip(self.conns[workers:], self.pids[workers:]):
-            if pid is not None:                   # it may be preloading: no need to wait
+            if pid:                               # it may be preloading: no need to wait
                 _kill(pid)
             else:                                 # adopted: it ends once it reads this
                 with contextlib.suppress(OSError, ValueError):
@@ -294,6 +311,7 @@ class Pool:
         how = ""
         with contextlib.suppress(ChildProcessError, OSError, TypeError):
             pid, status = os.waitpid(self._pid(w, 0.0), 0)
+            self.pids[w] = GONE                   # reaped: its pid may be reused, never signal it
             if pid and os.WIFSIGNALED(status):
                 how = f" (signal {signal.Signals(os.WTERMSIG(status)).name})"
             elif pid and os.WIFEXITED(status):
@@ -309,7 +327,7 @@ class Pool:
         every = list(zip(self.conns, self.pids)) + self.leaving
         if now:
             for _, pid in every:                  # the first of a batch first: it forks no more
-                if pid is not None:
+                if pid:
                     _kill(pid)
         else:
             for conn in self.conns:
@@ -320,7 +338,7 @@ class Pool:
                 pid = _read_pid(conn, SAFETY_SECONDS)
                 if pid is not None and now:
                     _kill(pid)
-            if pid is not None:
+            if pid:
                 with contextlib.suppress(ChildProcessError):
                     os.waitpid(pid, 0)
             conn.close()
