@@ -5,6 +5,7 @@ Bad input gives one line on stderr and exit code 2 (no traceback, nothing writte
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import sys
 from pathlib import Path
@@ -221,6 +222,15 @@ def _list(a) -> int:
 
 
 def _run(a) -> int:
+    from gnibench.suite.runs.pool import start
+
+    # first: the pool's workers get ready (numba) while the experiment is read (-j 1, Dask: none)
+    early = start(a.jobs) if a.executor == "local" else None
+    with early or contextlib.nullcontext() as pool:
+        return _run_with(a, pool)
+
+
+def _run_with(a, pool) -> int:
     from gnibench.reports.drawing import Drawers
     from gnibench.reports.markdown import render_summary
     from gnibench.suite.runs.runner import run_experiment
@@ -228,7 +238,8 @@ def _run(a) -> int:
     with Drawers() as drawers:      # the report's drawing process imports matplotlib meanwhile
         out = run_experiment(a.experiment, a.output, jobs=a.jobs, executor=a.executor,
                              scheduler=a.scheduler, fresh=a.fresh, summarize=render_summary,
-                             scale=a.scale, started=None if a.no_report else drawers.start)
+                             scale=a.scale, started=None if a.no_report else drawers.start,
+                             pool=pool)
         if not a.no_report:
             from gnibench.reports.site import build_site
 

@@ -18,9 +18,13 @@ counts as a failed run.
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
-import pandas as pd
 from gnibench.suite.cell.spec import structure
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 SEPARATOR = ";"          # between the metric texts of a cell (the texts contain commas)
 
@@ -41,6 +45,8 @@ def method_without_step(method: str) -> str:
 
 def final_time(row: pd.Series) -> str:
     """The planned final time, to 12 significant digits (t_end, or steps x h)."""
+    import pandas as pd
+
     t = row["t_end"] if pd.notna(row["t_end"]) else row["steps_planned"] * row["h"]
     return f"{float(t):.12g}"
 
@@ -53,6 +59,7 @@ def family_key(row: pd.Series) -> tuple[str, str, str]:
 def family_columns(cells: pd.DataFrame, samples: pd.DataFrame) -> pd.DataFrame:
     """``cells`` with the columns of every family metric its cells chose (see the module
     docstring); unchanged when no cell chose one."""
+    import pandas as pd
     from gnibench.suite.metrics.compute import parse_metric
 
     if "metrics" not in cells.columns:

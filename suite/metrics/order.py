@@ -23,12 +23,15 @@ against log h at fixed t) or its value at the last sample (``at=final``); a cell
 from __future__ import annotations
 
 import itertools
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 from gnibench.suite.foundation.params import Param
 from gnibench.suite.metrics.base import Metric, max_abs
 from gnibench.suite.metrics.growth import unknown_errors
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 PLATEAU = 1e-13
 TRIM = 0.2
@@ -93,6 +96,8 @@ def cell_error(cell: pd.Series, samples: pd.DataFrame, name: str, at: str) -> fl
 
 
 def _compute(cells: pd.DataFrame, samples: pd.DataFrame, values) -> pd.DataFrame:
+    import pandas as pd
+
     cells = cells.sort_values(["h", "cell"], ascending=[False, True], kind="stable")
     out = pd.DataFrame(index=pd.Index(cells["cell"].to_numpy(), name="cell"))
     hs = cells["h"].to_numpy(dtype=float)

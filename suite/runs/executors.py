@@ -9,36 +9,25 @@ once, into the disk cache, and the other cells, wherever they run, load it. Comp
 kernels run in parallel.
 
 * ``serial`` (``-j 1``): in this process, in cell order.
-* ``local`` (default, ``-j N``, N = the number of cores): a process pool. Workers ignore SIGINT
-  (the parent handles Ctrl-C and stops them) and report the progress of long cells through a
-  queue.
+* ``local`` (default, ``-j N``, N = the number of cores): a pool of forked workers
+  (:mod:`gnibench.suite.runs.pool`), started while the cells are prepared, that keep the kernels
+  they loaded. Workers ignore SIGINT (the parent handles Ctrl-C and stops them) and report the
+  progress of long cells through a queue.
 * ``dask`` (``--executor dask``): a ``distributed.LocalCluster`` of N single-threaded worker
   processes, or the scheduler at ``--scheduler ADDRESS``; the workers must have gnibench installed.
 """
 from __future__ import annotations
 
-import contextlib
-import os
-import queue
 import signal
 from collections.abc import Callable, Iterator
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
 from gnibench.suite.foundation.errors import UserError
-from gnibench.suite.foundation.processes import quiet_worker, stop_now
-from gnibench.suite.runs.cellwork import CellOutcome, install_reporter, run_cell
+from gnibench.suite.runs.cellwork import CellOutcome, run_cell
+from gnibench.suite.runs.pool import default_jobs, workers  # noqa: F401 - part of this interface
 
 EXECUTORS = ("local", "dask")
-POLL_SECONDS = 0.2
 
 Progress = Callable[[int, float], None]
-
-
-def default_jobs() -> int:
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:                       # not on Linux
-        return os.cpu_count() or 1
 
 
 def check(executor: str, jobs: int | None, scheduler: str | None) -> None:
@@ -65,81 +54,46 @@ def check(executor: str, jobs: int | None, scheduler: str | None) -> None:
         probe(scheduler)
 
 
+def start(executor: str, jobs: int | None, cells: int | None = None):
+    """The local pool, started now, or None where none is needed (serial, Dask, a single cell,
+    no fork): :func:`gnibench.suite.runs.pool.start`."""
+    if executor != "local":
+        return None
+    from gnibench.suite.runs.pool import start as start_pool
+
+    return start_pool(jobs, cells)
+
+
 def run(groups: list[list], executor: str = "local", jobs: int | None = None,
-        scheduler: str | None = None, progress: Progress | None = None) -> Iterator[CellOutcome]:
-    """Run the cells of ``groups`` and yield their outcomes as they finish."""
+        scheduler: str | None = None, progress: Progress | None = None,
+        pool=None) -> Iterator[CellOutcome]:
+    """Run the cells of ``groups``: an iterator of their outcomes as they finish (``pool``: the
+    local pool of :func:`start`, whose workers get their first cells at once; else one is started
+    here when needed)."""
     total = sum(len(g) for g in groups)
-    jobs = max(1, min(jobs or default_jobs(), total))     # -j 1000 for 6 cells: 6 processes
+    jobs = max(1, workers(jobs, total))
     if executor == "dask":
-        yield from _dask(groups, jobs, scheduler)
-    elif jobs == 1 or sum(len(g) for g in groups) <= 1:
+        return _dask(groups, jobs, scheduler)
+    if pool is not None and total:
+        return pool.run(groups, progress)
+    if jobs == 1 or total <= 1:
+        return _serial(groups, progress)
+    return _own_pool(groups, executor, jobs, total, progress)
+
+
+def _own_pool(groups, executor, jobs, total, progress) -> Iterator[CellOutcome]:
+    own = start(executor, jobs, total)
+    if own is None:
         yield from _serial(groups, progress)
-    else:
-        yield from _local(groups, jobs, progress)
+        return
+    with own:
+        yield from own.run(groups, progress)
 
 
 def _serial(groups, progress) -> Iterator[CellOutcome]:
     cells = sorted((c for g in groups for c in g), key=lambda c: c.id)
     for cell in cells:
         yield run_cell(cell, progress)
-
-
-# -- the local process pool ------------------------------------------------------------------
-
-_queue = None
-
-
-def _worker_init(q, parent: int) -> None:
-    """In each worker: Ctrl-C is the parent's business (SIGINT ignored, SIGTERM ends the worker),
-    the worker dies with its parent, and progress goes through the queue."""
-    global _queue
-    quiet_worker(parent)
-    _queue = q
-    install_reporter(_report)
-
-
-def _report(cell_id: int, fraction: float) -> None:
-    with contextlib.suppress(Exception):          # progress is best effort
-        _queue.put_nowait((cell_id, fraction))
-
-
-def _drain(q, progress) -> None:
-    while True:
-        try:
-            cell_id, fraction = q.get_nowait()
-        except (queue.Empty, OSError, ValueError):
-            return
-        if progress is not None:
-            progress(cell_id, fraction)
-
-
-def _local(groups, jobs, progress) -> Iterator[CellOutcome]:
-    import multiprocessing as mp
-
-    method = "fork" if "fork" in mp.get_all_start_methods() else "spawn"
-    ctx = mp.get_context(method)
-    q = ctx.Queue()
-    pool = ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_worker_init,
-                               initargs=(q, os.getpid()))
-    waiting = {i: list(g[1:]) for i, g in enumerate(groups)}
-    running = {pool.submit(run_cell, g[0]): i for i, g in enumerate(groups) if g}
-    try:
-        while running:
-            done, _ = wait(running, timeout=POLL_SECONDS, return_when=FIRST_COMPLETED)
-            _drain(q, progress)
-            for fut in done:
-                group = running.pop(fut)
-                for cell in waiting.pop(group, []):      # the kernel is compiled: the rest may go
-                    running[pool.submit(run_cell, cell)] = -1
-                yield fut.result()
-    finally:
-        _stop(pool)
-        q.close()
-
-
-def _stop(pool: ProcessPoolExecutor) -> None:
-    """Shut the pool down now: cancel what has not started, stop what runs (Ctrl-C)."""
-    stop_now(pool)
 
 
 # -- Dask -----------------------------------------------------------------------------------

@@ -24,9 +24,11 @@ which order the cells ran.
 Resuming: running the same command again reuses every stored cell whose key matches (spec, code
 and versions; :func:`gnibench.suite.runs.store.cell_key`) and computes only the others; ``fresh``
 ignores the store. An experiment's consolidated tables are rewritten after one of its cells
-finishes whenever the time since their last write is at least ``FLUSH_RATIO`` times what that
-write took (so that a run over many experiments, e.g. ``gnibench reproduce all``, does not rewrite
-the tables of the experiments whose cells are not running), at the end, and on Ctrl-C; unfinished cells appear with status ``pending`` and ``complete: false``.
+finishes whenever the time since their last write (or the start) is at least ``FLUSH_SECONDS``
+and ``FLUSH_RATIO`` times what that write took (so that a short run writes its tables once, and a
+run over many experiments, e.g. ``gnibench reproduce all``, does not rewrite the tables of the
+experiments whose cells are not running), at the end, and on Ctrl-C; unfinished cells appear with
+status ``pending`` and ``complete: false``.
 
 A cell that raises (anything but a KeyboardInterrupt) gets status ``error`` with the exception
 type and message as reason, and the run goes on. Bad input never reaches this point: the whole
@@ -50,11 +52,13 @@ from gnibench.suite.runs.progress import RunProgress
 from gnibench.suite.runs.store import Part, Store, cell_key
 
 FLUSH_RATIO = 10.0
+FLUSH_SECONDS = 5.0
 
 
 def run_experiment(name_or_path, out_dir=None, *, jobs: int | None = None,
                    executor: str = "local", scheduler: str | None = None, fresh: bool = False,
-                   log=None, summarize=None, scale: str = "paper", started=None) -> Path:
+                   log=None, summarize=None, scale: str = "paper", started=None,
+                   pool=None) -> Path:
     """Run an experiment (shipped name or TOML path); return the output directory.
 
     Parameters
@@ -80,6 +84,11 @@ def run_experiment(name_or_path, out_dir=None, *, jobs: int | None = None,
     started:
         Called once the experiment and the executor options are valid, before anything is
         written (the command line starts the report's drawing process there).
+    pool:
+        A local pool already started (:func:`gnibench.suite.runs.executors.start`; the command
+        line starts it first thing, so that its workers get ready while the experiment is read),
+        fitted to the cells to compute and used for them; the caller stops it. Default: one is
+        started here when needed.
     """
     experiment = load_experiment(name_or_path, scale)
     executors.check(executor, jobs, scheduler)
@@ -87,40 +96,55 @@ def run_experiment(name_or_path, out_dir=None, *, jobs: int | None = None,
         started()
     out = Path(out_dir) if out_dir is not None else Path("results") / experiment.name
     run_experiments([experiment], [out], out, jobs=jobs, executor=executor, scheduler=scheduler,
-                    fresh=fresh, log=log, summarize=summarize, name=experiment.name)
+                    fresh=fresh, log=log, summarize=summarize, name=experiment.name,
+                    pool=pool)
     return out
 
 
 def run_experiments(experiments: list[Experiment], outs: list[Path], store_root: Path, *,
                     jobs: int | None = None, executor: str = "local",
                     scheduler: str | None = None, fresh: bool = False, log=None,
-                    summarize=None, name: str = "run") -> list[Path]:
+                    summarize=None, name: str = "run", pool=None) -> list[Path]:
     """Run several validated experiments over one store: a cell shared by several experiments
     (same key) is computed once; each experiment's tables are consolidated into its own
     directory (``outs``, in order). Executor options must have been checked."""
     log = sys.stderr if log is None else log
     outs = [Path(o) for o in outs]
-    with Store(store_root) as store:
+    own = None
+    if pool is None:            # the workers get ready while the store is read
+        pool = own = executors.start(executor, jobs,
+                                     len({id(c) for e in experiments for c in e.cells}))
+    with own if own is not None else contextlib.nullcontext(), Store(store_root) as store:
         for out in outs:
             Store.make_output_dir(out)
-        writers = [Consolidator(e, store, out, summarize) for e, out in zip(experiments, outs)]
+        keys = [{c.id: cell_key(c) for c in e.cells} for e in experiments]
         unique: dict[str, object] = {}
-        for w in writers:
-            for c in w.experiment.cells:
-                unique.setdefault(w.keys[c.id], c)
+        for e, k in zip(experiments, keys):
+            for c in e.cells:
+                unique.setdefault(k[c.id], c)
         done = set() if fresh else {k for k in unique if store.read(k)}
         todo = [c for k, c in unique.items() if k not in done]
         key_of = {id(c): k for k, c in unique.items()}
+        if pool is not None:
+            pool.fit(executors.workers(jobs, len(todo)))
         where = outs[0] if len(outs) == 1 else store_root
         print(f"gnibench: {name}: {len(unique)} cells -> {where} ({len(done)} reused from the "
               f"store, {len(todo)} to compute)", file=log, flush=True)
         progress = RunProgress(len(unique), len(done), log, name)
-        outcomes = executors.run(_groups(todo), executor, jobs, scheduler, progress.cell_progress)
+        # the pool's workers get their first cells now; the tables' writers are made meanwhile
+        outcomes = executors.run(_groups(todo), executor, jobs, scheduler, progress.cell_progress,
+                                 pool)
+        writers: list[Consolidator] = []
         try:
             with contextlib.closing(outcomes):      # an error stops the workers at once
+                writers += [Consolidator(e, store, out, summarize, k)
+                            for e, out, k in zip(experiments, outs, keys)]
                 for outcome in outcomes:
                     key = key_of.get(id(outcome.cell)) or cell_key(outcome.cell)
                     store.write(key, _part(outcome), writers[0].empty_samples)
+                    # read back (verified) while the workers go on: the tables at the end are
+                    # made from the disk's parts without waiting for the disk
+                    store.read(key)
                     done.add(key)
                     progress.cell_done(outcome)
                     for w in writers:      # only the experiments that hold the cell have news
@@ -163,11 +187,12 @@ def _part(o: CellOutcome) -> Part:
 class Consolidator:
     """Writes the consolidated tables (and the summary) from the stored parts."""
 
-    def __init__(self, experiment: Experiment, store: Store, out: Path, summarize=None):
+    def __init__(self, experiment: Experiment, store: Store, out: Path, summarize=None,
+                 keys: dict | None = None):
         from gnibench.suite.runs.tables import samples_table
 
         self.experiment, self.store, self.out, self.summarize = experiment, store, out, summarize
-        self.keys = {c.id: cell_key(c) for c in experiment.cells}
+        self.keys = keys if keys is not None else {c.id: cell_key(c) for c in experiment.cells}
         self.key_set = set(self.keys.values())
         self.dirty = False          # a cell of this experiment finished since the last write
         self.state_names = experiment_states(experiment)
@@ -177,7 +202,8 @@ class Consolidator:
         self.fields_due = any(p.get("fields") for p in figure.get("panels", []))
 
     def due(self) -> bool:
-        return time.perf_counter() - self.last_write >= FLUSH_RATIO * self.write_cost
+        return time.perf_counter() - self.last_write >= max(FLUSH_SECONDS,
+                                                             FLUSH_RATIO * self.write_cost)
 
     def flush(self, done: set) -> None:
         from gnibench.suite.metrics.families import family_columns

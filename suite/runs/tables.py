@@ -8,15 +8,26 @@ between two runs of the same experiment on the same machine. The column contract
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
-import pandas as pd
 from gnibench.suite.foundation.status import TABLE_STATUSES
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 SAMPLE_FRONT = ("cell", "problem", "method", "t", "steps", "nfev")
 STATUSES = TABLE_STATUSES
 
 
 def sample_frame(traj, metrics) -> pd.DataFrame:
+    """The table of one cell (see :func:`sample_columns`)."""
+    import pandas as pd
+
+    return pd.DataFrame(sample_columns(traj, metrics))
+
+
+def sample_columns(traj, metrics) -> dict[str, np.ndarray]:
     """The table of one cell: its samples and the per-sample metric columns.
 
     Samples: ``t``, the states, ``err_<I>``, ``global_error``, ``steps``, ``nfev``, then the
@@ -49,16 +60,29 @@ def sample_frame(traj, metrics) -> pd.DataFrame:
     if clash:
         raise ValueError(f"metric columns {sorted(clash)} clash with the sample columns")
     out.update(cols)
-    return pd.DataFrame(out)
+    return out
 
 
 def cell_samples(cell, traj, metrics) -> pd.DataFrame:
     """The samples of one cell of an experiment: its ``gnibench solve`` table plus the cell id
     and specs."""
-    df = sample_frame(traj, metrics)
+    return cell_frame(cell, cell_sample_columns(traj, metrics))
+
+
+def cell_sample_columns(traj, metrics) -> dict[str, np.ndarray]:
+    """The columns of :func:`cell_samples` but the cell id and specs, as arrays (what a pool
+    worker sends: it builds no DataFrame, so it never imports pandas)."""
     clash = set(traj.state_names) & set(SAMPLE_FRONT + ("global_error",))
     if clash:
         raise ValueError(f"state names {sorted(clash)} clash with the fixed sample columns")
+    return sample_columns(traj, metrics)
+
+
+def cell_frame(cell, columns: dict[str, np.ndarray]) -> pd.DataFrame:
+    """The samples table of one cell from :func:`cell_sample_columns`."""
+    import pandas as pd
+
+    df = pd.DataFrame(columns)
     df.insert(0, "cell", np.int64(cell.id))
     df.insert(1, "problem", cell.problem)
     df.insert(2, "method", cell.method)
@@ -118,6 +142,8 @@ def samples_table(parts: list[tuple[pd.DataFrame, tuple[str, ...]]],
     States and integrals are the union over the cells, in order of first appearance; a column a
     cell's problem lacks is NaN in that cell's rows.
     """
+    import pandas as pd
+
     parts = sorted(parts, key=lambda p: int(p[0]["cell"].iloc[0]) if len(p[0]) else -1)
     empty = pd.DataFrame({c: pd.Series(dtype=t) for c, t in zip(
         SAMPLE_FRONT, ("int64", "object", "object", "float64", "int64", "float64"))})
@@ -146,6 +172,8 @@ _CELL_COLUMNS = ("cell", "group", "label", "problem", "method", "method_kind", "
 def cells_table(rows: list[dict]) -> pd.DataFrame:
     """One row per cell: the fixed columns, max_abs_err_<I>, the global errors, then the other
     per-cell metric values."""
+    import pandas as pd
+
     if not rows:                         # a figure of fields only has no cells
         return pd.DataFrame({c: pd.Series(dtype="object") for c in _CELL_COLUMNS})
     df = pd.DataFrame(sorted(rows, key=lambda r: r["cell"]))
@@ -158,6 +186,8 @@ def cells_table(rows: list[dict]) -> pd.DataFrame:
 
 
 def timings_table(rows: list[dict]) -> pd.DataFrame:
+    import pandas as pd
+
     columns = ("cell", "problem", "method", "status", "wall_seconds", "compile_seconds",
                "cache_misses")
     df = pd.DataFrame(sorted(rows, key=lambda r: r["cell"]), columns=list(columns))
