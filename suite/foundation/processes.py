@@ -64,3 +64,39 @@ def pool(workers: int, method: str = "spawn"):
         stop_now(executor)
         raise
     executor.shutdown(wait=True)
+
+
+def children() -> set[int]:
+    """This process's children (Linux: /proc; empty elsewhere), zombies included."""
+    found: set[int] = set()
+    with contextlib.suppress(OSError):
+        for task in os.listdir(f"/proc/{os.getpid()}/task"):
+            with contextlib.suppress(OSError), \
+                    open(f"/proc/{os.getpid()}/task/{task}/children") as f:
+                found.update(int(p) for p in f.read().split())
+    return found
+
+
+def _zombie(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            return f.read().rpartition(")")[2].split()[0] == "Z"
+    except (OSError, IndexError):
+        return False
+
+
+def reap_strays(before: set[int], quiet_checks: int = 3, seconds: float = 1.0) -> None:
+    """Wait for the children that ended since ``before`` was taken and that nobody waits for: the
+    short-lived processes a child subreaper adopts when their parent was killed (a pool stopped
+    while its first worker forked the others). Only zombies are reaped; a live child is left to
+    its owner. Returns after ``quiet_checks`` checks 10 ms apart found none (at most ``seconds``)."""
+    import time
+
+    quiet, deadline = 0, time.monotonic() + seconds
+    while quiet < quiet_checks and time.monotonic() < deadline:
+        strays = [pid for pid in children() - before if _zombie(pid)]
+        for pid in strays:
+            with contextlib.suppress(ChildProcessError):
+                os.waitpid(pid, os.WNOHANG)
+        quiet = 0 if strays else quiet + 1
+        time.sleep(0.01)

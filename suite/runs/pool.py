@@ -37,7 +37,7 @@ import time
 from collections import deque
 
 from gnibench.suite.foundation.outputs import Fault
-from gnibench.suite.foundation.processes import quiet_worker
+from gnibench.suite.foundation.processes import children, quiet_worker, reap_strays
 
 POLL_SECONDS = 0.2
 PR_SET_CHILD_SUBREAPER = 36
@@ -199,6 +199,7 @@ class Pool:
         self.leaving: list = []                   # (conn, pid) of workers told to end
         self.plan, self.sent = None, {}
         self.reaping = False
+        self.before: set[int] = set()             # children before this pool adopted any
 
     def start(self) -> Pool:
         """Fork the workers missing to reach ``size``: one that preloads and then forks the
@@ -211,6 +212,8 @@ class Pool:
         pairs = [Pipe() for _ in range(missing)]
         theirs = [child for _, child in pairs]
         ours = [conn for conn, _ in pairs]
+        if not self.reaping:
+            self.before = children()
         if missing >= 2 and (self.reaping or _subreaper(True)):
             self.reaping = True
             pid = _fork(_first, theirs[0], theirs[1:], self.conns + ours, os.getpid())
@@ -343,7 +346,8 @@ class Pool:
                     os.waitpid(pid, 0)
             conn.close()
         self.conns, self.pids, self.leaving = [], [], []
-        if self.reaping:
+        if self.reaping:             # middle processes adopted after their parent was killed
+            reap_strays(self.before)
             _subreaper(False)
             self.reaping = False
 
