@@ -11,6 +11,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+from gnibench.methods.summation import sum_param
 from gnibench.suite.foundation.errors import UserError
 from gnibench.suite.foundation.params import Param
 from gnibench.suite.foundation.registries import Registered
@@ -55,6 +56,9 @@ class Method(Registered):
     ``kind`` says how it runs (:data:`KINDS`); ``origin``, where a user definition comes from
     (None for the shipped methods; :mod:`gnibench.suite.foundation.registries`), and
     ``definition`` its text.
+    ``summation``, when set, offers the option ``sum`` (methods/summation.py) with that default:
+    ``plain`` for the seeds' methods, ``compensated`` for high-accuracy families whose round-off
+    would otherwise dominate their truncation error.
     """
 
     registry = "method"
@@ -77,10 +81,13 @@ class Method(Registered):
     kind: str = "compiled"
     origin: Any = None
     definition: str = ""             # a user definition's text (part of a stored cell's key)
+    summation: str | None = None     # default of the option sum (plain|compensated); None: none
 
     def __post_init__(self):
         if self.kind not in KINDS:
             raise ValueError(f"method {self.id}: bad kind {self.kind!r}; allowed: {KINDS}")
+        if self.summation is not None and all(p.name != "sum" for p in self.params):
+            object.__setattr__(self, "params", self.params + (sum_param(self.summation),))
 
     def check_structure(self, problem, has_modifiers: bool) -> None:
         """Refuse, with a clear error, a problem that lacks the structure this method needs."""

@@ -19,12 +19,15 @@ first-order method Φ (symplectic Euler, ``pstep_u``) and its adjoint Φ* (``pst
 
 Every stage reuses the partitioned kernels of methods/partitioned.py (explicit for separable
 problems, Newton otherwise). The orders are checked by measurement (tests/test_orders.py) and the
-consistency and symmetry conditions here.
+consistency and symmetry conditions here. Under ``sum=compensated`` every stage's block updates
+add their increments with the carried rounding error (``partitioned.compose``,
+methods/summation.py). Adding a composition: its coefficients here and one line in
+:mod:`methods` (``summation="compensated"`` makes that its default).
 """
 from __future__ import annotations
 
 from gnibench.methods.base import H_PARAM, NEWTON_PARAMS, Method
-from gnibench.methods.partitioned import _block
+from gnibench.methods.partitioned import _block, compose
 
 
 def _symmetric(w):
@@ -73,33 +76,35 @@ def _generate(data):
     def generate(ctx) -> str:
         src_u, ws_u = _block(ctx, "u")
         src_v, ws_v = _block(ctx, "v")
-        lines = ["\n@njit(cache=True)\ndef step(y, h, par, ws):", "    nf = 0.0", "    nj = 0.0"]
-        for cu, cv in substeps(data):
-            for block, w, c in (("u", 0, cu), ("v", 1, cv)):
-                lines += [f"    y, a, b, s = pstep_{block}(y, {c!r} * h, par, ws[{w}])",
-                          "    nf += a", "    nj += b", "    if s != STATUS_OK:", "        return y, nf, nj, s"]
-        lines.append("    return y, nf, nj, STATUS_OK")
+        blocks = [(block, repr(c), w) for cu, cv in substeps(data)
+                  for block, w, c in (("u", 0, cu), ("v", 1, cv))]
         return (src_u + src_v + f"\n@njit(cache=True)\ndef make_ws():\n    return ({ws_u}, {ws_v})\n"
-                + "\n".join(lines) + "\n")
+                + compose("step", blocks))
     return generate
 
 
-def composition(id, data, order, doc, reference="[B] §5; Yoshida (1990)"):
+def composition(id, data, order, doc, reference="[B] §5; Yoshida (1990)", *, summation="plain"):
+    """A composition with coefficients ``data`` (γ of Störmer-Verlet, or (α, β) pairs of
+    symplectic Euler and its adjoint); ``summation``: the default of its option ``sum``."""
     return Method(id=id, family="composition", order=order, reference=reference,
                   doc=doc, generate=_generate(data), params=(H_PARAM,) + NEWTON_PARAMS,
                   symplectic=True, symmetric=True, needs=("partition",), implicit=True,
-                  explicit_when="separable", data=data)
+                  explicit_when="separable", data=data, summation=summation)
 
 
 yoshida4 = composition("yoshida4", YOSHIDA4, 4, "Yoshida's 4th-order triple jump of Störmer-Verlet")
 yoshida6 = composition("yoshida6", YOSHIDA6, 6, "Yoshida's 6th-order composition (solution A)")
 yoshida8 = composition("yoshida8", YOSHIDA8, 8, "Yoshida's 8th-order composition (solution D)")
 suzuki4 = composition("suzuki4", SUZUKI4, 4, "Suzuki's fractal 4th-order composition of "
-                      "Störmer-Verlet (5 stages)", "Suzuki, Phys. Lett. A 146 (1990) 319")
+                      "Störmer-Verlet (5 stages)", "Suzuki, Phys. Lett. A 146 (1990) 319",
+                      summation="compensated")
 mclachlan4 = composition("mclachlan4", MCLACHLAN4, 4, "McLachlan's 4th-order composition of "
                          "symplectic Euler and its adjoint (5 stages)",
-                         "McLachlan, SIAM J. Sci. Comput. 16 (1995) 151; [HLW] V.3.3")
+                         "McLachlan, SIAM J. Sci. Comput. 16 (1995) 151; [HLW] V.3.3",
+                         summation="compensated")
 kahan_li6 = composition("kahan-li6", KAHAN_LI6, 6, "Kahan-Li 6th-order composition of "
-                        "Störmer-Verlet (9 stages)", "Kahan, Li, Math. Comp. 66 (1997) 1089")
+                        "Störmer-Verlet (9 stages)", "Kahan, Li, Math. Comp. 66 (1997) 1089",
+                        summation="compensated")
 kahan_li8 = composition("kahan-li8", KAHAN_LI8, 8, "Kahan-Li 8th-order composition of "
-                        "Störmer-Verlet (17 stages)", "Kahan, Li, Math. Comp. 66 (1997) 1089")
+                        "Störmer-Verlet (17 stages)", "Kahan, Li, Math. Comp. 66 (1997) 1089",
+                        summation="compensated")

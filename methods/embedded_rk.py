@@ -3,9 +3,11 @@
 Each pair is data: a tableau (the propagated solution), error weights e = b - b̂ over the stages
 (and over f(y1) when the last stage is f(y1), "first same as last"), the controller constants of
 the code it follows and, for DOPRI5 and DOP853, the continuous extension (methods/dense_output.py).
-One generator writes the cell's ``step`` (fixed step: the propagated solution) or ``step_err``
-(adaptive: also the scaled rms error) and ``step_stages`` (the same lines, also returning the
-stages, for dense output); methods/kernels/adaptive.py drives them.
+One generator writes the cell's ``step`` (fixed step: the propagated solution) or ``attempt``
+(adaptive: also the scaled rms error and the verdict) and ``attempt_stages`` (the same lines, also
+returning the stages, for dense output); under ``sum=compensated`` they add the increment
+h Σ b_i k_i to y with the carried rounding error (methods/summation.py). The adaptive loop of
+methods/kernels/adaptive.py drives them with Hairer's controller (methods/kernels/pair.py).
 """
 from __future__ import annotations
 
@@ -16,9 +18,17 @@ import gnibench.methods.dop853_coefficients as dop853_data
 from gnibench.methods import order_conditions as oc
 from gnibench.methods.base import Method, adaptive_params
 from gnibench.methods.dense_output import DenseOutput, generate_dense
-from gnibench.methods.events import grid_functions, root_functions, variant
-from gnibench.methods.explicit_rk import combination, generate_erk, helpers, stage_lines
-from gnibench.methods.kernels import adaptive, events
+from gnibench.methods.events import (
+    dense_grid_rows,
+    dense_section_rows,
+    grid_functions,
+    root_functions,
+    variant,
+)
+from gnibench.methods.explicit_rk import combination, generate_erk, helpers, increment, stage_lines
+from gnibench.methods.kernels import adaptive
+from gnibench.methods.kernels import pair as pair_kernel
+from gnibench.methods.summation import compensated
 from gnibench.methods.tableau import Tableau, lit, require, tableau, verdict
 from gnibench.suite.foundation.params import Param
 from gnibench.suite.foundation.templates import template
@@ -148,52 +158,69 @@ def _error_lines(pair: Pair, n: int) -> list[str]:
     return lines
 
 
-def generate_adaptive(pair: Pair):
+def _pair_functions() -> str:
+    """The pair's parts of the adaptive loop (methods/kernels/pair.py); the small ones inlined."""
+    names = ("adaptive_ws", "controller_init", "controller_state", "controller_clip",
+             "controller_prepare", "attempt_outcome", "controller_accept", "controller_reject",
+             "dense_coeffs", "partial_adaptive")
+    small = ("adaptive_ws", "controller", "attempt_outcome")
+    return "".join(template(getattr(pair_kernel, name), inline=name.startswith(small))
+                   for name in names)
+
+
+def generate_adaptive(data: Pair):
     def generate(ctx) -> str:
-        n, s, tab = ctx.n, pair.tab.stages, pair.tab
-        count = s - 1 if pair.fsal else s
-        lines, arities = stage_lines(tab, count, first="k0")
-        lines.append(f"    y1 = {combination(tab.doubles[1], arities)}")
-        fsal = pair.fsal and not pair.lazy_last
-        if fsal:
-            lines.append(f"    k{s - 1} = f(y1, par)")
-            knew = f"k{s - 1}"
+        n, s, tab = ctx.n, data.tab.stages, data.tab
+        count = s - 1 if data.fsal else s
+        stages, arities = stage_lines(tab, count, first="k0")
+        fsal = data.fsal and not data.lazy_last
+        knew = f"k{s - 1}" if fsal else "k0"  # else the loop evaluates f(y1) once accepted
+        increments = set()
+        if compensated(ctx.values):     # the increment h Σ b_i k_i added with the carried error
+            inc, k = increment(tab.doubles[1])
+            increments.add(k)
+            new_y, carry = [f"    y1, e1 = carry_add(y, e, {inc})"], "e1"
         else:
-            knew = "k0"                      # the driver evaluates f(y1) once the step is accepted
-        lines += _error_lines(pair, n)
-        # step_stages: the very same lines (hence the same y1 and err, bit for bit), also returning
-        # the stages for the continuous extension
-        stages = ", ".join(f"k{j}" for j in range(count)) + ("," if count == 1 else "")
-        body = (["\n@njit(cache=True)\ndef step_err(y, h, par, k0, rtol, atol):"] + lines
-                + [f"    return y1, err, {knew}"]
-                + ["\n@njit(cache=True)\ndef step_stages(y, h, par, k0, rtol, atol):"] + lines
-                + [f"    return y1, err, {knew}, ({stages})"])
+            new_y, carry = [f"    y1 = {combination(tab.doubles[1], arities)}"], "e"
+        lines = (stages + new_y + ([f"    k{s - 1} = f(y1, par)"] if fsal else [])
+                 + _error_lines(data, n))
+        head = "(y, e, k0, h, par, ws, rtol, atol):"
+        # attempt_stages: the very same lines (hence the same y1 and err, bit for bit), also
+        # returning the stages for the continuous extension
+        ks = ", ".join(f"k{j}" for j in range(count)) + ("," if count == 1 else "")
+        body = (["\n@njit(cache=True)\ndef attempt" + head] + lines
+                + [f"    return y1, {carry}, err, {knew}"]
+                + ["\n@njit(cache=True)\ndef attempt_stages" + head] + lines
+                + [f"    return y1, {carry}, err, {knew}, ({ks})"])
         sections = bool(ctx.problem is not None and ctx.problem.sections)
         drive = adaptive.integrate_adaptive
-        src = (variant(drive, "integrate_adaptive") + template(adaptive.partial_adaptive)
-               + grid_functions("adaptive", "partial_adaptive")
-               + variant(drive, "adaptive_grid", "GRID", "GRIDDED"))
+        src = (variant(drive, "integrate_adaptive") + grid_functions("adaptive", "partial_adaptive")
+               + variant(drive, "adaptive_grid", "GRID", "GRIDDED",
+                         rename={"grid_rows": "grid_rows_adaptive"}))
         if sections:
             src += variant(drive, "adaptive_section", "SECTION")
         dense_nfev = 0.0
-        if pair.dense is not None:            # integrate_dense, dense_coeffs and what they call
-            dense_src, dense_arities = generate_dense(pair.dense, tab, count, n)
+        if data.dense is not None:            # integrate_dense and what it calls
+            dense_src, dense_arities = generate_dense(data.dense, tab, count, n)
             arities |= dense_arities
-            dense_nfev = float(pair.dense.new_stages(tab))
-            src += (dense_src + template(adaptive.dense_coeffs) + root_functions(n, sections)
-                    + variant(drive, "integrate_dense", "DENSE_OUTPUT", "GRIDDED", "WITH_STAGES"))
+            dense_nfev = float(data.dense.new_stages(tab))
+            src += (dense_src + root_functions(n, sections) + dense_grid_rows()
+                    + variant(drive, "integrate_dense", "DENSE_OUTPUT", "GRIDDED", "WITH_STAGES",
+                              rename={"grid_rows": "grid_rows_dense"}))
             if sections:
-                src += (template(events.dense_crossing)
+                src += (dense_section_rows()
                         + variant(drive, "adaptive_section_dense", "SECTION", "SECTION_DENSE",
-                                  "WITH_STAGES"))
+                                  "WITH_STAGES", rename={"section_rows": "section_rows_dense"}))
         comma = "," if n == 1 else ""
         shift = ", ".join(f"y[{i}] + h * v[{i}]" for i in range(n))
-        consts = (f"\nFSAL = {fsal}\nSTAGES_NEW = {float(count - 1 + fsal)!r}\nIORD = {pair.iord}\n"
-                  f"EXPO = {pair.expo!r}\nBETA = {pair.beta!r}\nSAFE = {pair.safe!r}\n"
-                  f"FAC1 = {pair.fac1!r}\nFAC2 = {pair.fac2!r}\nDENSE_NFEV = {dense_nfev!r}\n"
+        consts = (f"\nFSAL = {fsal}\nSTAGES_NEW = {float(count - 1 + fsal)!r}\n"
+                  f"IORD = {data.iord}\nEXPO = {data.expo!r}\nBETA = {data.beta!r}\n"
+                  f"SAFE = {data.safe!r}\nFAC1 = {data.fac1!r}\nFAC2 = {data.fac2!r}\n"
+                  f"DENSE_NFEV = {dense_nfev!r}\n"
                   f"\n@njit(cache=True)\ndef to_tuple_shift(y, h, v):\n    return ({shift}{comma})\n")
-        return (consts + helpers(n, arities) + "\n".join(body) + "\n"
-                + template(adaptive.initial_step) + template(adaptive.first_step) + src)
+        return (consts + helpers(n, arities, increments) + "\n".join(body) + "\n"
+                + template(adaptive.initial_step) + template(adaptive.first_step)
+                + _pair_functions() + src)
     return generate
 
 
@@ -221,10 +248,13 @@ def _params(adaptive_default: bool, rtol: float, dense: bool):
     ) + adaptive_params(rtol) + ((DT_OUT,) if dense else ())
 
 
-def embedded(id, pair, order, reference, doc, adaptive_default=True, rtol=1e-6):
+def embedded(id, pair, order, reference, doc, adaptive_default=True, rtol=1e-6,
+             summation="plain"):
+    """An embedded pair; ``summation``: the default of its option ``sum`` (methods/summation.py)."""
     return Method(id=id, family="embedded-rk", order=order, reference=reference, doc=doc,
                   generate=_generate(pair), data=pair,
-                  params=_params(adaptive_default, rtol, pair.dense is not None))
+                  params=_params(adaptive_default, rtol, pair.dense is not None),
+                  summation=summation)
 
 
 merson = embedded("merson", MERSON, 4, "[B] §6, §8", "Kutta-Merson 4(5); fixed step by default",

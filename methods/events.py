@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import numpy as np
 from gnibench.methods import dop853_coefficients as dop853
-from gnibench.methods.kernels import events
+from gnibench.methods.kernels import events, sampling
 from gnibench.methods.tableau import lit
 from gnibench.suite.foundation.templates import template
 
@@ -166,25 +166,45 @@ def henon_all(T, Y, idx, par, out_t, out_y, out_ok, out_m):
 
 
 def grid_functions(family: str, partial: str) -> str:
-    """``partial_sample_<family>`` and ``grid_sample_<family>`` (methods/kernels/events.py) bound to
-    the family's partial step ``partial`` (``partial_fixed``, ``partial_adaptive``)."""
+    """``partial_sample_<family>``, ``grid_sample_<family>`` (methods/kernels/events.py) and
+    ``grid_rows_<family>`` (methods/kernels/sampling.py) bound to the family's partial step
+    ``partial`` (``partial_fixed``, ``partial_adaptive``)."""
     ps, gs = f"partial_sample_{family}", f"grid_sample_{family}"
     return (template(events.partial_sample, {"partial_sample": ps, "PARTIAL": partial})
-            + template(events.grid_sample, {"grid_sample": gs, "partial_sample": ps}))
+            + template(events.grid_sample, {"grid_sample": gs, "partial_sample": ps})
+            + template(sampling.grid_rows, {"grid_rows": f"grid_rows_{family}", "GRID_SAMPLE": gs,
+                                            "DENSE_OUTPUT": "False"}))
+
+
+def dense_grid_rows() -> str:
+    """``grid_rows_dense``: the time-grid samples of a step by its continuous extension."""
+    return template(sampling.grid_rows, {"grid_rows": "grid_rows_dense", "DENSE_OUTPUT": "True",
+                                         "GRID_SAMPLE": "grid_sample_adaptive"})
 
 
 def section_functions(n: int) -> str:
-    """What the section drivers call: the crossing test, the writer, Hénon's locator."""
+    """What the section drivers call: the crossing test, the writer, Hénon's locator and
+    ``section_rows`` (a step's crossing by Hénon's trick)."""
     return (template(events.crosses) + template(events.section_event)
-            + template(events.henon_crossing) + henon_source(n))
+            + template(events.henon_crossing) + henon_source(n)
+            + template(sampling.section_rows, {"SECTION_DENSE": "False"}))
+
+
+def dense_section_rows() -> str:
+    """``section_rows_dense``: a step's crossing located on its continuous extension."""
+    return (template(events.dense_crossing)
+            + template(sampling.section_rows, {"section_rows": "section_rows_dense",
+                                               "SECTION_DENSE": "True"}))
 
 
 FLAGS = ("DENSE_OUTPUT", "GRID", "GRIDDED", "SECTION", "SECTION_DENSE", "WITH_STAGES")
 
 
-def variant(func, name: str, *on: str) -> str:
+def variant(func, name: str, *on: str, rename: dict[str, str] | None = None) -> str:
     """A driver template generated as ``name`` with the literal flags ``on`` True, the others
-    False (so each copy compiles only its own loop; see methods/kernels/adaptive.py)."""
-    rename = {flag: str(flag in on) for flag in FLAGS}
-    rename[func.__name__] = name
-    return template(func, rename)
+    False (so each copy compiles only its own loop; see methods/kernels/adaptive.py), and the
+    names in ``rename`` (e.g. the family's ``grid_rows``) replaced."""
+    names = {flag: str(flag in on) for flag in FLAGS}
+    names[func.__name__] = name
+    names.update(rename or {})
+    return template(func, names)

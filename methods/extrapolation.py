@@ -5,7 +5,8 @@ Column j of the tableau is Gragg's midpoint rule with n_j substeps and the smoot
 (HNW (9.13)), extrapolated by Aitken-Neville in h² (HNW (9.10)); with the harmonic sequence
 n_j = 2j the value T_kk has order 2k (HNW Theorem II.9.1). Adaptive mode (the default) runs
 ODEX's order and step-size control (methods/kernels/extrapolation.py); ``adaptive=false`` takes
-fixed steps h with k columns, order 2k.
+fixed steps h with k columns, order 2k. ``sum=compensated`` adds the extrapolated increment to y
+with the carried rounding error (methods/summation.py).
 """
 from __future__ import annotations
 
@@ -56,6 +57,10 @@ def harmonic(kmax: int) -> tuple[int, ...]:
 
 
 KMAX_LIMIT = 16
+#: the controller's small pieces, inlined into the loop by numba (no separate compilation)
+INLINE = {"adaptive_ws", "controller_init", "controller_state", "controller_clip",
+          "controller_prepare", "attempt", "attempt_outcome", "controller_accept",
+          "controller_reject"}
 ODEX = Extrapolation(sequence=harmonic(KMAX_LIMIT))
 
 
@@ -78,17 +83,26 @@ def _generate(data: Extrapolation):
                f"    return ({shift}{comma})\n"
                f"\n@njit(cache=True)\ndef scaled(a, v):\n    return ({scale}{comma})\n"
                + template(extrapolation.gragg_column) + template(extrapolation.neville)
-               + template(extrapolation.make_ws) + template(extrapolation.step))
+               + "".join(template(getattr(extrapolation, name), inline=name == "solution")
+                         for name in ("make_ws", "fixed_increment", "step", "step_sum",
+                                      "solution")))
         if kmax:
-            src += (template(adaptive.initial_step, {"IORD": "HINIT_ORDER"})
+            loop = adaptive.integrate_adaptive
+            src += ("\nFSAL = False\n"
+                    + template(adaptive.initial_step, {"IORD": "HINIT_ORDER"})
                     + template(adaptive.first_step)
-                    + template(extrapolation.column)
-                    + variant(extrapolation.integrate_adaptive, "integrate_adaptive")
-                    + template(extrapolation.partial_adaptive)
+                    + "".join(template(getattr(extrapolation, name), inline=name in INLINE)
+                              for name in ("column", "adaptive_ws", "controller_init",
+                                           "controller_state", "controller_clip",
+                                           "controller_prepare", "attempt", "attempt_outcome",
+                                           "controller_accept", "controller_reject",
+                                           "partial_adaptive"))
+                    + variant(loop, "integrate_adaptive")
                     + grid_functions("adaptive", "partial_adaptive")
-                    + variant(extrapolation.integrate_adaptive, "adaptive_grid", "GRID"))
+                    + variant(loop, "adaptive_grid", "GRID", "GRIDDED",
+                              rename={"grid_rows": "grid_rows_adaptive"}))
             if ctx.problem is not None and ctx.problem.sections:
-                src += variant(extrapolation.integrate_adaptive, "adaptive_section", "SECTION")
+                src += variant(loop, "adaptive_section", "SECTION")
         return src
     return generate
 
@@ -111,4 +125,4 @@ odex = Method(id="odex", family="extrapolation", order=8,
               reference="HNW I §II.9; Hairer's ODEX (beyond the seeds)",
               doc="GBS extrapolation (harmonic sequence), adaptive order and step as in ODEX; "
                   "fixed mode: k columns, order 2k (declared order: the default k=4)",
-              generate=_generate(ODEX), data=ODEX, params=_params())
+              generate=_generate(ODEX), data=ODEX, params=_params(), summation="plain")

@@ -171,9 +171,9 @@ def generating_code(problem) -> str:
     key = f"{problem.id}-genfun{ORDER}-{digest}"
     if key not in _texts:
         path = cache_dir("problems") / f"{key}.code.py"
-        raw = read_checked(path, "generating-function code")
-        if raw is not None:
-            _texts[key] = raw.decode()
+        text = read_checked(path, "generating-function code", parse=bytes.decode)
+        if text is not None:
+            _texts[key] = text
         else:
             _texts[key] = _generate(problem)
             write_checked(path, _texts[key])

@@ -108,12 +108,14 @@ FEAGIN10 = feagin_pair()
 
 _REF = "Verner, Numer. Algorithms 53 (2010) 383-396 (beyond the seeds)"
 vern6 = embedded("vern6", VERN6, 6, _REF, "Verner's efficient 6(5) pair, interpolant of order 6",
-                 rtol=1e-8)
+                 rtol=1e-8, summation="compensated")
 vern7 = embedded("vern7", VERN7, 7, _REF, "Verner's efficient 7(6) pair, interpolant of order 6 "
-                 "(the published order-7 one misses 72 order-7 conditions)", rtol=1e-8)
+                 "(the published order-7 one misses 72 order-7 conditions)", rtol=1e-8,
+                 summation="compensated")
 vern8 = embedded("vern8", VERN8, 8, _REF, "Verner's efficient 8(7) pair, interpolant of order 8",
-                 rtol=1e-10)
+                 rtol=1e-10, summation="compensated")
 vern9 = embedded("vern9", VERN9, 9, _REF, "Verner's efficient 9(8) pair, interpolant of order 9",
-                 rtol=1e-10)
+                 rtol=1e-10, summation="compensated")
 feagin10 = embedded("feagin10", FEAGIN10, 10, "Feagin (2007), IAENG conf. (beyond the seeds)",
-                    "Feagin's 10(8) pair (no dense output: time grid by partial steps)", rtol=1e-12)
+                    "Feagin's 10(8) pair (no dense output: time grid by partial steps)", rtol=1e-12,
+                    summation="compensated")

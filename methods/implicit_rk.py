@@ -2,7 +2,11 @@
 
 Stages are solved by full Newton with the field's Jacobian to round-off (methods/kernels/irk.py).
 A step that does not converge in ``newton_maxit`` iterations ends the run with status
-``newton_failed``.
+``newton_failed``. With ``fixed_point = K`` the stages are solved instead by at most K fixed-point
+iterations (no Jacobian); a step that has not converged then is accepted with its last iterate and
+counted in ``njev`` ([HLW] Fig 2.4's implicit Euler, see methods/kernels/irk.py).
+``sum=compensated`` adds the increment Σ d_j Z_j with the carried rounding
+error (methods/summation.py).
 """
 from __future__ import annotations
 
@@ -11,6 +15,7 @@ from fractions import Fraction as Fr
 from gnibench.methods.base import H_PARAM, NEWTON_PARAMS, Method
 from gnibench.methods.kernels import irk
 from gnibench.methods.tableau import Tableau, lit, tableau
+from gnibench.suite.foundation.params import Param
 from gnibench.suite.foundation.templates import template
 
 IMPLICIT_EULER = tableau([[1]], [1], [1], order=1)                      # [HLW] (1.6)
@@ -51,15 +56,29 @@ def generate_irk(tab: Tableau):
                   "A = (" + ", ".join("(" + ", ".join(lit(x) for x in row) + ",)"
                                       for row in tab.a) + ",)",
                   "D = (" + ", ".join(lit(x) for x in d) + ",)"]
-        return "\n" + "\n".join(consts) + "\n" + template(irk.make_ws) + template(irk.step)
+        k = int(ctx.values.get("fixed_point", 0))
+        if k:                                   # fixed-point iteration instead of Newton
+            consts.append(f"FIXED_POINT = {k}")
+            solver = template(irk.stages_fixed_point, {"stages_fixed_point": "stages"})
+        else:
+            solver = template(irk.stages)
+        return ("\n" + "\n".join(consts) + "\n" + template(irk.make_ws) + solver
+                + template(irk.step) + template(irk.step_sum))
 
     return generate
 
 
-def irk_method(id, tab, reference, doc, **props):
+FIXED_POINT_PARAM = Param(
+    "fixed_point", 0, "solve the stages by at most this many fixed-point iterations instead of "
+    "Newton (0: Newton); a step not converged then is accepted and counted in njev",
+    kind="int", low=0, high=100000, show_default=False)
+
+
+def irk_method(id, tab, reference, doc, summation="plain", **props):
     return Method(id=id, family="implicit-rk", order=tab.order, reference=reference, doc=doc,
                   generate=generate_irk(tab), data=tab, implicit=True,
-                  params=(H_PARAM,) + NEWTON_PARAMS, **props)
+                  params=(H_PARAM,) + NEWTON_PARAMS + (FIXED_POINT_PARAM,), summation=summation,
+                  **props)
 
 
 implicit_euler = irk_method("implicit-euler", IMPLICIT_EULER, "[HLW] (1.6)", "implicit Euler method")

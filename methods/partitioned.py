@@ -5,6 +5,9 @@ implicit in v. Störmer-Verlet [HLW] (1.17) is the composition (adjoint, h/2) o 
 h/2), which for a separable H = T(p) + V(q) with blocks (p, q) is exactly (1.17). A block update
 is a straight tuple update when the problem's structure makes it explicit (no modifier, and the
 block's field does not depend on the block); otherwise Newton solves it (kernels/partitioned.py).
+Under ``sum=compensated`` every block update (two per partitioned-Euler step, so four per
+Störmer-Verlet step and per stage of a composition) adds its increment with the carried rounding
+error ([HLW] VIII.5, methods/summation.py): the ``_sum`` forms ``pstep_u_sum``, ``step_sum``.
 """
 from __future__ import annotations
 
@@ -14,17 +17,30 @@ from gnibench.suite.foundation.templates import template
 
 
 def _explicit_block(name: str, n: int, i_idx, e_idx) -> str:
-    """Tuple code for w1 = w0 + h g_I(y0), e1 = e0 + h g_E(w1, e0): two half-evaluations."""
+    """Tuple code for w1 = w0 + h g_I(y0), e1 = e0 + h g_E(w1, e0): two half-evaluations; and its
+    compensated form ``<name>_sum(y, e, h, par, ws)``, each component's increment added with its
+    carried error."""
     first = ", ".join(f"y[{i}] + h * g[{i}]" if i in i_idx else f"y[{i}]" for i in range(n))
     second = ", ".join(f"w[{i}] + h * g[{i}]" if i in e_idx else f"w[{i}]" for i in range(n))
     comma = "," if n == 1 else ""
-    return (f"\n@njit(cache=True)\ndef {name}(y, h, par, ws):\n"
-            f"    g = f(y, par)\n    w = ({first}{comma})\n    g = f(w, par)\n"
-            f"    return ({second}{comma}), 1.0, 0.0, STATUS_OK\n")
+    plain = (f"\n@njit(cache=True)\ndef {name}(y, h, par, ws):\n"
+             f"    g = f(y, par)\n    w = ({first}{comma})\n    g = f(w, par)\n"
+             f"    return ({second}{comma}), 1.0, 0.0, STATUS_OK\n")
+    lines = [f"\n@njit(cache=True)\ndef {name}_sum(y, e, h, par, ws):", "    g = f(y, par)"]
+    for i in range(n):
+        lines.append(f"    w{i}, c{i} = carry_sum(y[{i}], e[{i}], h * g[{i}])" if i in i_idx
+                     else f"    w{i}, c{i} = y[{i}], e[{i}]")
+    lines.append(f"    g = f(({', '.join(f'w{i}' for i in range(n))}{comma}), par)")
+    for i in e_idx:
+        lines.append(f"    w{i}, c{i} = carry_sum(w{i}, c{i}, h * g[{i}])")
+    lines.append(f"    return ({', '.join(f'w{i}' for i in range(n))}{comma}), "
+                 f"({', '.join(f'c{i}' for i in range(n))}{comma}), 1.0, 0.0, STATUS_OK")
+    return plain + "\n".join(lines) + "\n"
 
 
 def _block(ctx, which: str) -> tuple[str, str]:
-    """Source of one partitioned-Euler step implicit in block ``which`` ('u' or 'v')."""
+    """Source of one partitioned-Euler step implicit in block ``which`` ('u' or 'v'), and its
+    compensated form ``pstep_<which>_sum``."""
     u, v = ctx.meta["u_idx"], ctx.meta["v_idx"]
     i_idx, e_idx = (u, v) if which == "u" else (v, u)
     explicit = ctx.explicit_u if which == "u" else ctx.explicit_v
@@ -34,17 +50,40 @@ def _block(ctx, which: str) -> tuple[str, str]:
     tup = lambda xs: "(" + ", ".join(str(x) for x in xs) + ",)"
     consts = (f"\nNI_{which} = {len(i_idx)}\nNE_{which} = {len(e_idx)}\n"
               f"I_IDX_{which} = {tup(i_idx)}\nE_IDX_{which} = {tup(e_idx)}\n")
-    rename = {"make_ws_X": f"make_ws_{which}", "step_X": name, "NI": f"NI_{which}",
-              "NE": f"NE_{which}", "I_IDX": f"I_IDX_{which}", "E_IDX": f"E_IDX_{which}"}
-    src = consts + template(partitioned.make_ws_X, rename) + template(partitioned.step_X, rename)
+    rename = {"make_ws_X": f"make_ws_{which}", "step_X_sum": f"{name}_sum", "step_X": name,
+              "NI": f"NI_{which}", "NE": f"NE_{which}", "I_IDX": f"I_IDX_{which}",
+              "E_IDX": f"E_IDX_{which}"}
+    src = consts + "".join(template(fn, rename) for fn in (partitioned.make_ws_X,
+                                                           partitioned.step_X,
+                                                           partitioned.step_X_sum))
     return src, f"make_ws_{which}()"
+
+
+def compose(name: str, blocks: list[tuple[str, str, int]]) -> str:
+    """``name(y, h, par, ws)`` chaining block steps (block, factor of h, workspace index) and, for
+    ``sum=compensated``, ``name_sum(y, e, h, par, ws)`` carrying e through every block."""
+    plain = [f"\n@njit(cache=True)\ndef {name}(y, h, par, ws):", "    nf = 0.0", "    nj = 0.0"]
+    comp = [f"\n@njit(cache=True)\ndef {name}_sum(y, e, h, par, ws):", "    nf = 0.0",
+            "    nj = 0.0"]
+    for block, factor, w in blocks:
+        plain += [f"    y, a, b, s = pstep_{block}(y, {factor} * h, par, ws[{w}])",
+                  "    nf += a", "    nj += b", "    if s != STATUS_OK:",
+                  "        return y, nf, nj, s"]
+        comp += [f"    y, e, a, b, s = pstep_{block}_sum(y, e, {factor} * h, par, ws[{w}])",
+                 "    nf += a", "    nj += b", "    if s != STATUS_OK:",
+                 "        return y, e, nf, nj, s"]
+    plain.append("    return y, nf, nj, STATUS_OK")
+    comp.append("    return y, e, nf, nj, STATUS_OK")
+    return "\n".join(plain) + "\n" + "\n".join(comp) + "\n"
 
 
 def _single(which: str):
     def generate(ctx) -> str:
         src, ws = _block(ctx, which)
         return (src + f"\n@njit(cache=True)\ndef make_ws():\n    return {ws}\n"
-                f"\n@njit(cache=True)\ndef step(y, h, par, ws):\n    return pstep_{which}(y, h, par, ws)\n")
+                f"\n@njit(cache=True)\ndef step(y, h, par, ws):\n    return pstep_{which}(y, h, par, ws)\n"
+                f"\n@njit(cache=True)\ndef step_sum(y, e, h, par, ws):\n"
+                f"    return pstep_{which}_sum(y, e, h, par, ws)\n")
     return generate
 
 
@@ -57,7 +96,12 @@ def _stormer_verlet(ctx) -> str:
             "    y1, n1, j1, s1 = pstep_u(y, 0.5 * h, par, ws[0])\n"
             "    if s1 != STATUS_OK:\n        return y, n1, j1, s1\n"
             "    y2, n2, j2, s2 = pstep_v(y1, 0.5 * h, par, ws[1])\n"
-            "    return y2, n1 + n2, j1 + j2, s2\n")
+            "    return y2, n1 + n2, j1 + j2, s2\n"
+            "\n@njit(cache=True)\ndef step_sum(y, e, h, par, ws):\n"
+            "    y1, e1, n1, j1, s1 = pstep_u_sum(y, e, 0.5 * h, par, ws[0])\n"
+            "    if s1 != STATUS_OK:\n        return y, e, n1, j1, s1\n"
+            "    y2, e2, n2, j2, s2 = pstep_v_sum(y1, e1, 0.5 * h, par, ws[1])\n"
+            "    return y2, e2, n1 + n2, j1 + j2, s2\n")
 
 
 _PARAMS = (H_PARAM,) + NEWTON_PARAMS
@@ -66,14 +110,14 @@ symplectic_euler = Method(
     id="symplectic-euler", family="partitioned", order=1, reference="[HLW] (1.9)",
     doc="symplectic Euler, implicit in the first block u, explicit in v (explicit for separable H)",
     generate=_single("u"), params=_PARAMS, symplectic=True, needs=("partition",),
-    implicit=True, explicit_when="separable")
+    implicit=True, explicit_when="separable", summation="plain")
 symplectic_euler_adjoint = Method(
     id="symplectic-euler-adjoint", family="partitioned", order=1, reference="[HLW] (1.9)",
     doc="adjoint symplectic Euler, implicit in the second block v, explicit in u",
     generate=_single("v"), params=_PARAMS, symplectic=True, needs=("partition",),
-    implicit=True, explicit_when="separable")
+    implicit=True, explicit_when="separable", summation="plain")
 stormer_verlet = Method(
     id="stormer-verlet", family="partitioned", order=2, reference="[HLW] (1.17)",
     doc="Störmer-Verlet / leapfrog: composition of the two symplectic Euler methods with h/2",
     generate=_stormer_verlet, params=_PARAMS, symplectic=True, symmetric=True, needs=("partition",),
-    implicit=True, explicit_when="separable")
+    implicit=True, explicit_when="separable", summation="plain")

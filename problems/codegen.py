@@ -42,8 +42,7 @@ def problem_code(problem) -> tuple[str, dict]:
     key = _source_hash(problem)
     d = cache_dir("problems")
     path = d / f"{problem.id}-{key}.code.json"
-    raw = read_checked(path, "problem code")
-    doc = json.loads(raw) if raw is not None else None
+    doc = read_checked(path, "problem code", parse=_parse_code)
     if doc is None:
         text, meta = _generate(problem)
         write_checked(path, json.dumps({"text": text, "meta": meta}))
@@ -54,6 +53,15 @@ def problem_code(problem) -> tuple[str, dict]:
 
 
 _memo: dict[int, tuple] = {}
+
+
+def _parse_code(raw: bytes) -> dict:
+    """A cached entry as written by problem_code (anything else raises: it is rebuilt)."""
+    doc = json.loads(raw)
+    if not (isinstance(doc, dict) and isinstance(doc.get("text"), str)
+            and isinstance(doc.get("meta"), dict)):
+        raise TypeError("not a problem code entry")
+    return doc
 
 
 def problem_meta(problem) -> dict:

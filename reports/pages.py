@@ -68,8 +68,11 @@ def _horizon(row) -> str:
     return f"steps = {num(row.get('steps_planned'))}"
 
 
-def cells_table(part, samples, wall: dict[int, float], compile_s: dict[int, float]) -> dict:
-    """The table of one problem's cells: header, rows of strings, which columns are specs."""
+def cells_table(part, samples, wall: dict[int, float], compile_s: dict[int, float],
+                by_cell: dict | None = None, memo: dict | None = None) -> dict:
+    """The table of one problem's cells: header, rows of strings, which columns are specs.
+    ``by_cell``: :func:`~gnibench.reports.plots.trajectories` of ``samples`` (if already split);
+    ``memo``: fitted growth exponents, shared with the figures."""
     integrals = [i for i in dict.fromkeys("/".join(part["integrals"].fillna("")).split("/")) if i]
     errs = [i for i in integrals if f"max_abs_err_{i}" in part and part[f"max_abs_err_{i}"].notna().any()]
     has_global = part["final_global_error"].notna().any()
@@ -82,21 +85,23 @@ def cells_table(part, samples, wall: dict[int, float], compile_s: dict[int, floa
     if has_global:
         header += ["final global error", "max global error", "growth exp. global", "reference"]
     header += extra
+    if samples is not None and by_cell is None:
+        by_cell = plots.trajectories(samples)
     rows = []
     for r in part.to_dict("records"):
         cid = int(r["cell"])
-        s = samples[samples["cell"] == cid] if samples is not None else None
-        if s is not None and "crossing" in s:
-            s = s[s["crossing"].isna()]
+        s = by_cell.get(cid) if samples is not None else None
         kind = " (runs in Python)" if r.get("method_kind") == "python" else ""
         row = [str(cid), str(r["method"]) + kind, str(r["status"]), _horizon(r), num(r["every"]),
                num(r["t_final"], ".6g"), num(r["steps"]), num(r["nfev"]),
                num(wall.get(cid, math.nan) * 1e3), num(compile_s.get(cid), ".2f")]
         row += [num(r[f"max_abs_err_{i}"]) for i in errs]
-        row += [num(plots.exponent(r, s, i) if s is not None else math.nan, ".2f") for i in errs]
+        row += [num(plots.exponent(r, s, i, memo) if samples is not None else math.nan, ".2f")
+                for i in errs]
         if has_global:
             row += [num(r["final_global_error"]), num(r["max_global_error"]),
-                    num(plots.exponent(r, s, "global") if s is not None else math.nan, ".2f"),
+                    num(plots.exponent(r, s, "global", memo) if samples is not None
+                        else math.nan, ".2f"),
                     str(r.get("reference") or "–")]
         row += [num(r[c]) if isinstance(r[c], (int, float)) else str(r[c]) for c in extra]
         rows.append(row)
@@ -137,8 +142,9 @@ def _cost(c: league.Cost, fmt: str, scale: float = 1.0) -> str:
     return f"{value} (cell {c.cells[0]})"
 
 
-def experiment_page(res, img_dir: Path, slug: str, thresholds) -> dict:
-    """The content of one experiment's page; figures are written into ``img_dir``."""
+def experiment_page(res, img_dir: Path, slug: str, thresholds, jobs) -> dict:
+    """The content of one experiment's page; the drawing of its figures (into ``img_dir``) is
+    appended to ``jobs``."""
     meta, cells = res.meta, res.cells
     paragraphs, notes = split_description(meta.get("description", ""))
     wall = res.wall_by_cell()
@@ -169,9 +175,11 @@ def experiment_page(res, img_dir: Path, slug: str, thresholds) -> dict:
         part = cells[sections == problem]
         prefix = f"{i:02d}-" + re.sub(r"[^A-Za-z0-9._-]+", "_", str(problem))[:40]
         ps = samples[samples["cell"].isin(part["cell"])] if samples is not None else None
-        figs = plots.time_figures(problem, part, ps, img_dir, prefix, slug) if ps is not None \
-            and len(ps) else []
-        wp = workprecision.wp_figures(problem, part, wall, img_dir, prefix, slug) \
+        by_cell = plots.trajectories(ps) if ps is not None else None
+        memo: dict = {}
+        figs = plots.time_figures(problem, part, ps, img_dir, prefix, slug, jobs, by_cell, memo) \
+            if ps is not None and len(ps) else []
+        wp = workprecision.wp_figures(problem, part, wall, img_dir, prefix, slug, jobs) \
             if workprecision.has_sweeps(part) else []
         failed = [{"cell": str(r.cell), "method": str(r.method), "status": str(r.status),
                    "reason": str(r.reason or "")} for r in part.itertuples() if r.status != "ok"]
@@ -181,7 +189,8 @@ def experiment_page(res, img_dir: Path, slug: str, thresholds) -> dict:
             "name": str(problem), "anchor": prefix, "figures": [f.__dict__ for f in figs],
             "wp": [f.__dict__ for f in wp], "no_nfev": workprecision.no_nfev(part) if wp else [],
             "league": league_tables(part, wall, thresholds),
-            "table": cells_table(part, ps, wall, compile_s), "failed": failed, "groups": groups})
+            "table": cells_table(part, ps, wall, compile_s, by_cell, memo), "failed": failed,
+            "groups": groups})
     return page
 
 

@@ -1,4 +1,5 @@
-"""The default figures of an experiment page, drawn from its tables (matplotlib, Agg).
+"""The default figures of an experiment page, described from its tables (drawn by
+:mod:`gnibench.reports.render`, matplotlib's Agg canvas).
 
 Per problem: the invariant errors |I(y(t)) − I(y0)| against t (one panel per integral, log y,
 log x when the samples span two decades or more), with each curve's growth exponent in t in the
@@ -18,10 +19,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from gnibench.reports.drawing import Job
 from gnibench.reports.palette import styles
+from gnibench.reports.render import Panel, Plot, Series
 
 MAX_CURVES = 12
-DPI = 100
 
 
 @dataclass
@@ -31,15 +33,6 @@ class Figure:
     file: str
     title: str
     caption: str
-
-
-def pyplot():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
 
 
 def pick_cells(cells) -> tuple[list[int], str]:
@@ -61,28 +54,14 @@ def _label(row) -> str:
     return label if len(label) <= 48 else label[:45] + "…"
 
 
-def _save(fig, out_dir: Path, name: str) -> str:
-    from matplotlib.ticker import LogLocator, NullLocator
-
-    for ax in fig.axes:          # minor ticks of log axes: thousands of tick objects per page
-        for axis, lim in ((ax.xaxis, ax.get_xlim()), (ax.yaxis, ax.get_ylim())):
-            if axis.get_scale() == "log":
-                axis.set_minor_locator(NullLocator())
-                if lim[0] > 0 and lim[1] / lim[0] < 30:       # under 1.5 decades: label 1, 2, 5
-                    axis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
-    out_dir.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out_dir / name, dpi=DPI)
-    pyplot().close(fig)
-    return name
-
-
 def _log_x(ts: list[np.ndarray]) -> bool:
     pos = np.concatenate([t[t > 0] for t in ts]) if ts else np.array([])
     return len(pos) > 1 and pos.max() / pos.min() >= 100
 
 
-def exponent(row, samples_cell, name: str) -> float:
-    """The growth exponent in t of err_<name> (or ``global``) of one cell."""
+def exponent(row, samples_cell, name: str, memo: dict | None = None) -> float:
+    """The growth exponent in t of err_<name> (or ``global``) of one cell (``samples_cell``: its
+    samples, or None); ``memo`` keeps fitted values by (cell, name)."""
     from gnibench.suite.metrics.growth import envelope, growth_exponent
 
     col = f"growth_exponent_{name}"
@@ -90,10 +69,22 @@ def exponent(row, samples_cell, name: str) -> float:
                                                    and math.isnan(row[col])):
         return float(row[col])
     err_col = "global_error" if name == "global" else f"err_{name}"
-    if err_col not in samples_cell or len(samples_cell) < 3:
+    if samples_cell is None or err_col not in samples_cell or len(samples_cell) < 3:
         return math.nan
+    key = (int(row["cell"]), name)
+    if memo is not None and key in memo:
+        return memo[key]
     t = samples_cell["t"].to_numpy(float)
-    return growth_exponent(t, envelope(samples_cell[err_col].to_numpy(float)), 0.01 * t[-1], t[-1])
+    p = growth_exponent(t, envelope(samples_cell[err_col].to_numpy(float)), 0.01 * t[-1], t[-1])
+    if memo is not None:
+        memo[key] = p
+    return p
+
+
+def trajectories(samples) -> dict[int, object]:
+    """The samples of each cell, section crossings left out, by cell id (in one pass)."""
+    traj = samples[samples["crossing"].isna()] if "crossing" in samples else samples
+    return {int(c): part for c, part in traj.groupby("cell", sort=False)}
 
 
 def shades(cells) -> dict[int, float]:
@@ -107,16 +98,21 @@ def shades(cells) -> dict[int, float]:
     return out
 
 
-def _panel(ax, cells, samples, ids, column, style, name, with_exponent=True) -> int:
-    """Draw |column| against t for the cells, with a legend on the right of the panel (cell,
-    method, growth exponent in t); returns how many exact zeros were left out."""
+def _panel(cells, by_cell, ids, column, style, name, with_exponent=True, memo=None,
+           shade=None) -> tuple[Panel, int]:
+    """|column| against t for the cells (``by_cell``: their samples by id), with a legend on the
+    right of the panel (cell, method, growth exponent in t); and how many exact zeros were left
+    out."""
     zeros = 0
-    shade = shades(cells)
+    shade = shades(cells) if shade is None else shade
+    rows = {int(r["cell"]): r for r in cells.to_dict("records")}
     ts = []
+    panel = Panel(yscale="log", xlabel="t", grid=True,
+                  legend={"fontsize": 7, "loc": "upper left", "bbox_to_anchor": (1.01, 1.0),
+                          "frameon": False})
     for cid in ids:
-        row = cells.loc[cells["cell"] == cid].iloc[0]
-        s = samples[samples["cell"] == cid]
-        if column not in s or s[column].isna().all():
+        row, s = rows[cid], by_cell.get(cid)
+        if s is None or column not in s or s[column].isna().all():
             continue
         t, e = s["t"].to_numpy(float), np.abs(s[column].to_numpy(float))
         ok = np.isfinite(e) & (e > 0) & (t > 0)
@@ -126,45 +122,45 @@ def _panel(ax, cells, samples, ids, column, style, name, with_exponent=True) -> 
         ts.append(t[ok])
         label = f"c{cid} {_label(row)}"
         if with_exponent:
-            p = exponent(row, s, name)
+            p = exponent(row, s, name, memo)
             label += f"  t^{p:.2f}" if math.isfinite(p) else ""
         st = style[row["family"]]
-        ax.plot(t[ok], e[ok], color=st["color"], linestyle=st["linestyle"], linewidth=1.1,
-                alpha=shade.get(cid, 1.0), label=label)
-    ax.set_yscale("log")
+        panel.series.append(Series(t[ok], e[ok], {
+            "color": st["color"], "linestyle": st["linestyle"], "linewidth": 1.1,
+            "alpha": shade.get(cid, 1.0), "label": label}))
     if _log_x(ts):
-        ax.set_xscale("log")
-    ax.grid(True, which="major", alpha=0.3)
-    ax.set_xlabel("t")
-    if ax.get_legend_handles_labels()[0]:
-        ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
-    return zeros
+        panel.xscale = "log"
+    return panel, zeros
 
 
-def layout(fig, rows: int, right: float = 0.98) -> None:
+def layout(size: tuple[float, float], rows: int, right: float = 0.98) -> dict:
     """Fixed margins (tight_layout measures every tick label: seconds per page on log axes)."""
-    height = fig.get_size_inches()[1]
-    fig.subplots_adjust(left=0.09, right=right, bottom=0.55 / height + 0.02,
-                        top=1 - 0.45 / height, hspace=0.42, wspace=0.28)
+    height = size[1]
+    return {"left": 0.09, "right": right, "bottom": 0.55 / height + 0.02,
+            "top": 1 - 0.45 / height, "hspace": 0.42, "wspace": 0.28}
 
 
-def _grid(n: int, cols: int = 1, right: float = 0.56):
-    """n panels, one per row by default, legends to their right."""
-    plt = pyplot()
-    rows = math.ceil(n / cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(13.0 if cols == 1 else 6.2 * cols,
-                                                  3.3 * rows + 0.8), squeeze=False)
-    layout(fig, rows, right=right)
-    for ax in axes.ravel()[n:]:
-        ax.set_visible(False)
-    return fig, axes.ravel()[:n]
+def _grid(panels: list[Panel], cols: int = 1, right: float = 0.56) -> Plot:
+    """The panels, one per row by default, legends to their right."""
+    rows = math.ceil(len(panels) / cols)
+    size = (13.0 if cols == 1 else 6.2 * cols, 3.3 * rows + 0.8)
+    return Plot(size, rows, cols, panels, layout(size, rows, right=right))
 
 
-def time_figures(problem: str, cells, samples, out_dir: Path, prefix: str, slug: str) -> list[Figure]:
-    """The time-series figures of one problem (see the module docstring)."""
-    plt = pyplot()
+def time_figures(problem: str, cells, samples, out_dir: Path, prefix: str, slug: str,
+                 jobs, by_cell: dict | None = None, memo: dict | None = None) -> list[Figure]:
+    """The time-series figures of one problem (see the module docstring); their drawing is
+    appended to ``jobs``. ``by_cell``: :func:`trajectories` of the samples (if already split);
+    ``memo``: fitted growth exponents, shared with the table of cells."""
     out: list[Figure] = []
+
+    def add(name: str, plot: Plot, title: str, caption: str) -> None:
+        jobs.append(Job(plot, out_dir / name))
+        out.append(Figure(f"{slug}/{name}", title, caption))
+
     traj = samples[samples["crossing"].isna()] if "crossing" in samples else samples
+    by_cell = trajectories(samples) if by_cell is None else by_cell
+    shade = shades(cells)
     ids, note = pick_cells(cells[cells["cell"].isin(traj["cell"].unique())])
     style = styles(list(dict.fromkeys(cells["family"])),
                    dict(zip(cells["family"], cells["adaptive"])),
@@ -172,39 +168,41 @@ def time_figures(problem: str, cells, samples, out_dir: Path, prefix: str, slug:
     integrals = [i for i in dict.fromkeys("/".join(cells["integrals"].fillna("")).split("/")) if i]
     integrals = [i for i in integrals if f"err_{i}" in traj and traj[f"err_{i}"].notna().any()]
     if ids and integrals:
-        fig, axes = _grid(len(integrals))
-        zeros = 0
-        for ax, name in zip(axes, integrals):
-            zeros += _panel(ax, cells, traj, ids, f"err_{name}", style, name)
-            ax.set_ylabel(f"|{name}(y(t)) − {name}(y0)|")
-            ax.set_title(f"{problem}: error of {name}", fontsize=10)
-        file = _save(fig, out_dir, f"{prefix}-invariants.png")
+        panels, zeros = [], 0
+        for name in integrals:
+            panel, z = _panel(cells, by_cell, ids, f"err_{name}", style, name, memo=memo,
+                              shade=shade)
+            panel.ylabel = f"|{name}(y(t)) − {name}(y0)|"
+            panel.title = f"{problem}: error of {name}"
+            panels.append(panel)
+            zeros += z
         cap = ("Invariant errors against time (log scale; legend: growth exponent in t of the "
                "error envelope, fitted over [0.01 T, T]).")
         cap += f" {zeros} exact zeros are not drawn." if zeros else ""
-        out.append(Figure(f"{slug}/{file}", f"{problem}: invariant errors", f"{cap} {note}".strip()))
+        add(f"{prefix}-invariants.png", _grid(panels), f"{problem}: invariant errors",
+            f"{cap} {note}".strip())
     if ids and "global_error" in traj and traj.loc[traj["cell"].isin(ids), "global_error"].notna().any():
-        fig, (ax,) = _grid(1)
-        _panel(ax, cells, traj, ids, "global_error", style, "global")
-        ax.set_ylabel("global error |y − y_ref|")
+        panel, _ = _panel(cells, by_cell, ids, "global_error", style, "global", memo=memo,
+                          shade=shade)
+        panel.ylabel = "global error |y − y_ref|"
         refs = sorted({r for r in cells["reference"].fillna("") if r}) if "reference" in cells else []
-        ax.set_title(f"{problem}: global error" + (f" (against {', '.join(refs)})" if refs else ""),
-                     fontsize=10)
-        file = _save(fig, out_dir, f"{prefix}-global-error.png")
-        out.append(Figure(f"{slug}/{file}", f"{problem}: global error",
-                          f"Global error against time (legend: its growth exponent in t). {note}".strip()))
+        panel.title = f"{problem}: global error" + (f" (against {', '.join(refs)})" if refs else "")
+        add(f"{prefix}-global-error.png", _grid([panel]), f"{problem}: global error",
+            f"Global error against time (legend: its growth exponent in t). {note}".strip())
     if ids and "eta" in traj and traj["eta"].notna().any():
-        fig, (ax,) = _grid(1)
-        _panel(ax, cells, traj[traj["eta"].notna()], ids, "eta", style, "eta", with_exponent=False)
-        ax.set_ylabel("η(nT) (rad)")
-        ax.set_title(f"{problem}: η(nT), angle between q(0) and q(nT)", fontsize=10)
-        file = _save(fig, out_dir, f"{prefix}-eta.png")
-        out.append(Figure(f"{slug}/{file}", f"{problem}: η(nT)",
-                          "η(nT) at whole periods ([B] §5.2, Fig 12), log scale."))
+        panel, _ = _panel(cells, by_cell, ids, "eta", style, "eta", with_exponent=False,
+                          shade=shade)
+        panel.ylabel = "η(nT) (rad)"
+        panel.title = f"{problem}: η(nT), angle between q(0) and q(nT)"
+        add(f"{prefix}-eta.png", _grid([panel]), f"{problem}: η(nT)",
+            "η(nT) at whole periods ([B] §5.2, Fig 12), log scale.")
     if "crossing" in samples and samples["crossing"].notna().any():
-        out += section_figures(problem, cells, samples[samples["crossing"].notna()], out_dir,
-                               prefix, slug, style)
-    plt.close("all")
+        plot = section_plot(problem, cells, samples[samples["crossing"].notna()], style)
+        if plot is not None:
+            coords = section_coords(str(cells["problem"].iloc[0]))
+            add(f"{prefix}-sections.png", plot, f"{problem}: Poincaré section",
+                f"Section crossings in the section's coordinates ({coords[0]}, {coords[1]}), "
+                "one panel per section cell.")
     return out
 
 
@@ -219,28 +217,26 @@ def section_coords(problem: str) -> tuple[str, ...]:
     return tuple(record.sections[0].coords)
 
 
-def section_figures(problem: str, cells, points, out_dir: Path, prefix: str, slug: str,
-                    style) -> list[Figure]:
+def section_plot(problem: str, cells, points, style) -> Plot | None:
     """One panel per section cell: its crossings in the section's coordinates."""
     coords = section_coords(str(cells["problem"].iloc[0]))
     if len(coords) < 2:
-        return []
+        return None
     ids = [int(c) for c in cells["cell"] if c in set(points["cell"])][:MAX_CURVES]
-    fig, axes = _grid(len(ids), cols=2 if len(ids) > 1 else 1, right=0.95)
-    for ax, cid in zip(axes, ids):
+    panels = []
+    for cid in ids:
         row = cells.loc[cells["cell"] == cid].iloc[0]
         s = points[points["cell"] == cid]
         x, y = s[coords[0]].to_numpy(float), s[coords[1]].to_numpy(float)
+        panel = Panel(xlabel=coords[0], ylabel=coords[1], title_size=9,
+                      title=f"cell {cid}: {_label(row)}  ({len(s)} points)")
         if "chart" in s and s["chart"].notna().any():
-            sc = ax.scatter(x, y, s=1.5, c=s["chart"].to_numpy(float), cmap="tab10", vmin=0.5,
-                            vmax=10.5, linewidths=0)
-            fig.colorbar(sc, ax=ax, label="chart", ticks=range(1, 9))
+            panel.series.append(Series(x, y, {
+                "s": 1.5, "c": s["chart"].to_numpy(float), "cmap": "tab10", "vmin": 0.5,
+                "vmax": 10.5, "linewidths": 0}, scatter=True))
+            panel.colorbar = {"label": "chart", "ticks": list(range(1, 9))}
         else:
-            ax.scatter(x, y, s=1.5, color=style[row["family"]]["color"], linewidths=0)
-        ax.set_xlabel(coords[0])
-        ax.set_ylabel(coords[1])
-        ax.set_title(f"cell {cid}: {_label(row)}  ({len(s)} points)", fontsize=9)
-    file = _save(fig, out_dir, f"{prefix}-sections.png")
-    return [Figure(f"{slug}/{file}", f"{problem}: Poincaré section",
-                   f"Section crossings in the section's coordinates ({coords[0]}, {coords[1]}), "
-                   "one panel per section cell.")]
+            panel.series.append(Series(x, y, {"s": 1.5, "color": style[row["family"]]["color"],
+                                              "linewidths": 0}, scatter=True))
+        panels.append(panel)
+    return _grid(panels, cols=2 if len(ids) > 1 else 1, right=0.95)

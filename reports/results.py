@@ -9,6 +9,7 @@ integrated.
 """
 from __future__ import annotations
 
+import contextlib
 import json
 import re
 from dataclasses import dataclass, field
@@ -38,13 +39,13 @@ class Results:
         return str(self.meta.get("experiment") or self.dir.name)
 
     def samples(self, columns: list[str] | None = None):
-        import pandas as pd
         import pyarrow.parquet as pq
 
         path = self.dir / "samples.parquet"
-        have = set(pq.read_schema(path).names)
+        with damaged(path):
+            have = set(pq.read_schema(path).names)
         cols = None if columns is None else [c for c in columns if c in have]
-        return pd.read_parquet(path, columns=cols)
+        return read_table(path, cols)
 
     def wall_by_cell(self) -> dict[int, float]:
         t = self.timings
@@ -60,12 +61,31 @@ class Ledger:
     meta: dict = field(default_factory=dict)
 
 
+@contextlib.contextmanager
+def damaged(path: Path):
+    """A table that cannot be read (truncated, damaged, not Parquet) is a one-line UserError."""
+    try:
+        yield
+    except Exception as e:  # noqa: BLE001 - pyarrow raises many kinds; all mean the same here
+        why = " ".join(str(e).split())[:160] or type(e).__name__
+        raise UserError(f"cannot read {path} ({why}); it is damaged or not a gnibench table: "
+                        f"run the command that wrote it again") from None
+
+
+def read_table(path: Path, columns: list[str] | None = None):
+    import pandas as pd
+
+    with damaged(path):
+        return pd.read_parquet(path, columns=columns)
+
+
 def parquet_meta(path: Path) -> dict:
     """The provenance (schema metadata key ``gnibench``) of a Parquet file."""
     import pyarrow.parquet as pq
 
-    md = pq.read_schema(path).metadata or {}
-    return json.loads(md.get(b"gnibench", b"{}"))
+    with damaged(path):
+        md = pq.read_schema(path).metadata or {}
+        return json.loads(md.get(b"gnibench", b"{}"))
 
 
 def is_results_dir(path: Path) -> bool:
@@ -74,12 +94,11 @@ def is_results_dir(path: Path) -> bool:
 
 def load_results(path: Path) -> Results:
     """Read one results directory (see the module docstring)."""
-    import pandas as pd
 
     path = Path(path)
     meta = parquet_meta(path / "cells.parquet")
-    cells = add_families(pd.read_parquet(path / "cells.parquet"))
-    timings = pd.read_parquet(path / "timings.parquet")
+    cells = add_families(read_table(path / "cells.parquet"))
+    timings = read_table(path / "timings.parquet")
     written = str(parquet_meta(path / "timings.parquet").get("written_at", ""))
     res = Results(path, meta, cells, timings, written)
     if (path / "figure" / "figure.json").exists():
@@ -93,7 +112,6 @@ def load_results(path: Path) -> Results:
 def find_results(dirs: list[Path]) -> tuple[list[Results], list[Ledger]]:
     """Every results directory given, or one level below a given directory; ledgers beside them.
     A directory with neither is a one-line UserError."""
-    import pandas as pd
 
     found: list[Results] = []
     ledgers: list[Ledger] = []
@@ -104,7 +122,7 @@ def find_results(dirs: list[Path]) -> tuple[list[Results], list[Ledger]]:
         inner = [d] if is_results_dir(d) else sorted(p for p in d.iterdir()
                                                        if p.is_dir() and is_results_dir(p))
         if (d / "ledger.parquet").is_file():
-            ledgers.append(Ledger(d, pd.read_parquet(d / "ledger.parquet"),
+            ledgers.append(Ledger(d, read_table(d / "ledger.parquet"),
                                   parquet_meta(d / "ledger.parquet")))
         if not inner and not (d / "ledger.parquet").is_file():
             raise UserError(f"{d} holds no results (cells.parquet, samples.parquet, "

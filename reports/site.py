@@ -17,13 +17,14 @@ than any backtick run inside it.
 """
 from __future__ import annotations
 
-import os
+import contextlib
 import re
 import shutil
 import time
 from pathlib import Path
 from urllib.parse import quote
 
+from gnibench.reports.drawing import Figures, early_drawers
 from gnibench.reports.league import DEFAULT_THRESHOLDS
 from gnibench.reports.markdown import code, escape
 from gnibench.reports.pages import experiment_page, index_entry
@@ -32,13 +33,41 @@ from gnibench.reports.results import find_results, slug
 _NUMBER = re.compile(r"^(–|-?inf|-?\d+(\.\d+)?(e[+-]?\d+)?)$")
 
 
+def _bytecode_cache(kind: str):
+    """Compiled templates kept in the cache directory (``templates-<kind>``), checksummed when
+    written and verified when read (:mod:`gnibench.suite.foundation.cache`); compiling the
+    templates costs more than rendering them. None when the cache directory is not usable."""
+    import jinja2
+    from gnibench.suite.foundation.cache import cache_dir, read_checked, write_checked
+
+    class CheckedBytecodeCache(jinja2.BytecodeCache):
+        def __init__(self, directory: Path):
+            self.directory = directory
+
+        def load_bytecode(self, bucket) -> None:
+            with contextlib.suppress(OSError):
+                data = read_checked(self.directory / f"{bucket.key}.bc", "compiled template")
+                if data is not None:
+                    bucket.bytecode_from_string(data)
+
+        def dump_bytecode(self, bucket) -> None:
+            with contextlib.suppress(OSError):
+                write_checked(self.directory / f"{bucket.key}.bc", bucket.bytecode_to_string())
+
+    try:
+        return CheckedBytecodeCache(cache_dir(f"templates-{kind}"))
+    except OSError:
+        return None
+
+
 def _environments():
     import jinja2
     from markupsafe import Markup
 
     loader = jinja2.PackageLoader("gnibench.reports", "templates")
     html = jinja2.Environment(loader=loader, autoescape=True, trim_blocks=False,
-                              undefined=jinja2.StrictUndefined)
+                              undefined=jinja2.StrictUndefined,
+                              bytecode_cache=_bytecode_cache("html"))
 
     def md_finalize(value):
         if isinstance(value, Markup):
@@ -62,7 +91,7 @@ def _environments():
         return Markup(quote(str(value), safe="/._-"))
 
     md = jinja2.Environment(loader=loader, autoescape=False, finalize=md_finalize,
-                            undefined=jinja2.StrictUndefined)
+                            undefined=jinja2.StrictUndefined, bytecode_cache=_bytecode_cache("md"))
     md.filters.update(code=code_span, code_cell=code_cell, fence=fence, link=link)
     return html, md
 
@@ -93,13 +122,14 @@ def _unique(name: str, taken: set[str]) -> str:
 def ledger_page(ledger, name: str, pages: set[str]) -> dict:
     """A claims ledger (gnibench verify): per section of the seeds, each claim with its verdict,
     the measured number beside the seed's and a link to its figure's page when the site has it."""
-    from gnibench.reports.ledger import ledger_context, render_ledger
+    from gnibench.reports.ledger import ledger_context, mutation_summary, render_ledger
 
     meta = ledger.meta or {}
+    mutants = mutation_summary(ledger.dir)
     return {"title": f"Claims ledger ({ledger.dir.name})", "name": name,
             "source": str(ledger.dir / "ledger.parquet"),
-            "markdown": render_ledger(ledger.table, meta),
-            **ledger_context(ledger.table, meta, pages)}
+            "markdown": render_ledger(ledger.table, meta, mutants),
+            **ledger_context(ledger.table, meta, pages, mutants)}
 
 
 MAX_NAV = 8
@@ -111,40 +141,37 @@ def natural_key(name: str) -> tuple:
                  for p in re.split(r"(\d+)", str(name)) if p)
 
 
-PARALLEL_PAGES = 4           # from this many experiments on, pages are drawn in parallel
-
-
-def _page(results_dir: Path, img_dir: Path, thresholds) -> dict:
-    """One experiment's page (its plots drawn into ``img_dir``), from its results directory."""
+def _page(res, img_dir: Path, thresholds, jobs) -> dict:
+    """One experiment's page; its figures (to be drawn into ``img_dir``) are appended to
+    ``jobs`` (a :class:`~gnibench.reports.drawing.Figures`)."""
     import numpy as np
-    from gnibench.reports.results import load_results
 
-    res = load_results(results_dir)
-    if img_dir.exists():
-        shutil.rmtree(img_dir)
-    img_dir.mkdir(parents=True)
     with np.errstate(all="ignore"):
-        page = experiment_page(res, img_dir, img_dir.name, thresholds)
+        page = experiment_page(res, img_dir, img_dir.name, thresholds, jobs)
+    if (img_dir / "figure").exists():
+        shutil.rmtree(img_dir / "figure")
     _copy_figure(res, img_dir)
     return page
 
 
 def build_site(dirs: list[Path], site: Path, thresholds=DEFAULT_THRESHOLDS,
-               benchmarks: Path | None = None, log=None) -> Path:
+               benchmarks: Path | None = None, log=None, drawers=None) -> Path:
     """Write the site for the results directories ``dirs`` into ``site``; return index.html.
 
     ``thresholds``: the accuracies ε of the league tables. ``benchmarks``: a benchmark storage
     directory (pytest-benchmark layout, ``<machine>/NNNN_<commit>.json``) for the timing page.
+    ``drawers``: a :class:`~gnibench.reports.drawing.Drawers` started earlier by the caller (who
+    closes it), e.g. before the run whose results are reported; default: one of this call's.
     Diverged cells (inf, overflow on log axes) are drawn as far as they are finite, silently.
     """
     import numpy as np
 
     with np.errstate(all="ignore"):
-        return _build_site(dirs, site, thresholds, benchmarks, log)
+        return _build_site(dirs, site, thresholds, benchmarks, log, drawers)
 
 
 def _build_site(dirs: list[Path], site: Path, thresholds, benchmarks: Path | None,
-                log) -> Path:
+                log, given) -> Path:
     from gnibench.reports.timing import timing_page
 
     found, ledgers = find_results(dirs)
@@ -154,23 +181,21 @@ def _build_site(dirs: list[Path], site: Path, thresholds, benchmarks: Path | Non
     img = site / "img"
     html, md = _environments()
     taken: set[str] = set()
-    jobs = [(res.dir, img / _unique(res.name, taken), thresholds) for res in found]
-    workers = min(os.cpu_count() or 1, len(jobs)) if len(jobs) >= PARALLEL_PAGES else 1
-    if workers > 1:          # pages are independent (each draws its own plots): one per process
-        import multiprocessing
-        from concurrent.futures import ProcessPoolExecutor
-
-        with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
-            pages = list(pool.map(_page, *zip(*jobs)))
-    else:
-        pages = [_page(*job) for job in jobs]
+    dirs = [img / _unique(res.name, taken) for res in found]
+    with contextlib.nullcontext(given) if given is not None else \
+            early_drawers([(res.dir, d) for res, d in zip(found, dirs)]) as drawers:
+        # each figure is drawn (or reused) as soon as its page describes it: reports/drawing.py
+        figures = Figures(drawers, dirs + ([img / "timing"] if benchmarks else []))
+        pages = [_page(res, d, thresholds, figures) for res, d in zip(found, dirs)]
+        timing = timing_page(benchmarks, img / "timing", "timing", figures) if benchmarks \
+            else None
+        figures.finish()
     if log is not None:
         for res in found:
             print(f"gnibench: report: {res.name} ({len(res.cells)} cells)", file=log, flush=True)
     slugs = {p["slug"] for p in pages}
     ledger_pages = [ledger_page(lg, _unique(f"ledger-{lg.dir.name}", taken), slugs)
                     for lg in ledgers]
-    timing = timing_page(benchmarks, img / "timing", "timing") if benchmarks else None
     nav = pages if len(pages) <= MAX_NAV else []       # many experiments: the index lists them
     common = {"nav": [{"slug": p["slug"], "name": p["name"]} for p in nav],
               "has_timing": timing is not None,

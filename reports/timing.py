@@ -11,8 +11,11 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+import numpy as np
+from gnibench.reports.drawing import Job
 from gnibench.reports.pages import num
-from gnibench.reports.plots import Figure, _save, layout, pyplot
+from gnibench.reports.plots import Figure, layout
+from gnibench.reports.render import Panel, Plot, Series
 from gnibench.suite.foundation.benchmarks import load_run, runs
 
 SLOWDOWN = 1.3
@@ -27,25 +30,38 @@ def history(storage: Path) -> list[dict]:
             doc = load_run(f)
         except (ValueError, TypeError, OSError):
             continue
-        commit = (doc.get("commit_info") or {}).get("id") or ""
+        try:
+            commit = str((doc.get("commit_info") or {}).get("id") or "")
+        except AttributeError:
+            commit = ""
         for b in doc["benchmarks"]:
-            stats = b.get("stats") or {}
-            extra = b.get("extra_info") or {}
-            rows.append({"machine": machine, "run": f.name[:4], "commit": commit[:8],
-                         "date": str(doc.get("datetime", ""))[:16],
-                         "group": str(b.get("group") or "other"),
-                         "name": str(b.get("fullname") or b.get("name")),
-                         "median": float(stats.get("median", math.nan)),
-                         "min": float(stats.get("min", math.nan)),
-                         "unit": str(extra.get("unit") or "s per round")})
+            try:                        # a hand-edited or damaged entry is skipped, not a crash
+                stats = b.get("stats") or {}
+                extra = b.get("extra_info") or {}
+                rows.append({"machine": machine, "run": f.name[:4], "commit": commit[:8],
+                             "date": str(doc.get("datetime", ""))[:16],
+                             "group": str(b.get("group") or "other"),
+                             "name": str(b.get("fullname") or b.get("name")),
+                             "median": float(stats.get("median", math.nan)),
+                             "min": float(stats.get("min", math.nan)),
+                             "unit": str(extra.get("unit") or "s per round")})
+            except (AttributeError, TypeError, ValueError):
+                continue
     return rows
 
 
-def timing_page(storage: Path, out_dir: Path, slug: str) -> dict:
-    """The content of the timing page (figures written into ``out_dir``)."""
+def timing_page(storage: Path, out_dir: Path, slug: str, jobs=None) -> dict:
+    """The content of the timing page; its figures (to be drawn into ``out_dir``) are appended
+    to ``jobs`` (a list or :class:`~gnibench.reports.drawing.Figures`; None: drawn now)."""
+    if jobs is None:
+        from gnibench.reports.drawing import draw
+
+        jobs = []
+        page = timing_page(storage, out_dir, slug, jobs)
+        draw(jobs)
+        return page
     import pandas as pd
 
-    plt = pyplot()
     df = pd.DataFrame(history(storage))
     page = {"title": "Timing history", "figures": [], "rows": [], "code": [0],
             "header": ["benchmark", "machine", "unit", "last median", "previous median",
@@ -57,26 +73,27 @@ def timing_page(storage: Path, out_dir: Path, slug: str) -> dict:
     if df.empty:
         page["paragraphs"].append("No saved benchmark runs were found.")
         return page
-    out_dir.mkdir(parents=True, exist_ok=True)
     for gi, (group, part) in enumerate(df.groupby("group", sort=True)):
-        fig, ax = plt.subplots(figsize=(11, 4.6))
         runs_order = list(dict.fromkeys(zip(part["machine"], part["run"], part["commit"])))
         xpos = {r: i for i, r in enumerate(runs_order)}
-        for (name, machine), series in part.groupby(["name", "machine"], sort=True):
-            x = [xpos[r] for r in zip(series["machine"], series["run"], series["commit"])]
-            line, = ax.plot(x, series["median"], marker="o", markersize=4,
-                            label=f"{name} [{machine}]"[-70:])
-            ax.plot(x, series["min"], color=line.get_color(), linewidth=0.6, alpha=0.6)
-        ax.set_xticks(range(len(runs_order)))
-        ax.set_xticklabels([f"{r}\n{c}" for _, r, c in runs_order], fontsize=7)
-        ax.set_yscale("log")
-        ax.set_ylabel(", ".join(sorted(set(part["unit"]))))
-        ax.set_xlabel("saved run (number, commit)")
-        ax.set_title(f"{group}: median (markers) and min (thin) per saved run", fontsize=10)
-        ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
-        layout(fig, 1, right=0.62)
-        file = _save(fig, out_dir, f"group-{gi:02d}.png")
+        panel = Panel(yscale="log", ylabel=", ".join(sorted(set(part["unit"]))),
+                      xlabel="saved run (number, commit)", grid=True,
+                      title=f"{group}: median (markers) and min (thin) per saved run",
+                      legend={"fontsize": 7, "loc": "center left", "bbox_to_anchor": (1.01, 0.5)},
+                      xticks=list(range(len(runs_order))),
+                      xticklabels=[f"{r}\n{c}" for _, r, c in runs_order])
+        for k, ((name, machine), series) in enumerate(part.groupby(["name", "machine"], sort=True)):
+            x = np.array([xpos[r] for r in zip(series["machine"], series["run"], series["commit"])],
+                         dtype=float)
+            colour = f"C{k % 10}"                 # matplotlib's default colour cycle
+            panel.series.append(Series(x, series["median"].to_numpy(float), {
+                "color": colour, "marker": "o", "markersize": 4,
+                "label": f"{name} [{machine}]"[-70:]}))
+            panel.series.append(Series(x, series["min"].to_numpy(float), {
+                "color": colour, "linewidth": 0.6, "alpha": 0.6}))
+        size = (11, 4.6)
+        file = f"group-{gi:02d}.png"
+        jobs.append(Job(Plot(size, 1, 1, [panel], layout(size, 1, right=0.62)), out_dir / file))
         page["figures"].append(Figure(f"{slug}/{file}", str(group),
                                       "History of the median per benchmark (log scale).").__dict__)
     for (name, machine), series in df.groupby(["name", "machine"], sort=True):
@@ -86,5 +103,4 @@ def timing_page(storage: Path, out_dir: Path, slug: str) -> dict:
         page["rows"].append([name, machine, series["unit"].iloc[-1], num(last), num(prev),
                              num(ratio, ".2f"), "yes" if ratio > SLOWDOWN else "no",
                              str(len(series))])
-    plt.close("all")
     return page

@@ -15,8 +15,10 @@ import math
 from pathlib import Path
 
 import numpy as np
+from gnibench.reports.drawing import Job
 from gnibench.reports.palette import styles
-from gnibench.reports.plots import Figure, _save, layout, pyplot
+from gnibench.reports.plots import Figure, layout
+from gnibench.reports.render import Panel, Plot, Series
 
 
 def has_sweeps(cells) -> bool:
@@ -44,9 +46,9 @@ def no_nfev(cells) -> list[str]:
 
 
 def wp_figures(problem: str, cells, wall_by_cell: dict[int, float], out_dir: Path, prefix: str,
-               slug: str) -> list[Figure]:
-    """The work-precision figures of one problem's cells (with family columns)."""
-    plt = pyplot()
+               slug: str, jobs) -> list[Figure]:
+    """The work-precision figures of one problem's cells (with family columns); their drawing is
+    appended to ``jobs``."""
     fams = list(dict.fromkeys(cells["family"]))
     style = styles(fams, dict(zip(cells["family"], cells["adaptive"])),
                    dict(zip(cells["family"], cells["method_kind"])))
@@ -55,10 +57,11 @@ def wp_figures(problem: str, cells, wall_by_cell: dict[int, float], out_dir: Pat
     rows = measures(cells)
     if not rows:
         return []
-    fig, axes = plt.subplots(len(rows), 2, figsize=(12.4, 3.9 * len(rows) + 0.6), squeeze=False)
-    for (col, label), pair in zip(rows, axes):
-        for ax, (xcol, xlabel) in zip(pair, (("nfev", "f-evaluations (nfev)"),
-                                             ("wall_ms", "wall time (ms, integration only)"))):
+    panels = []
+    for col, label in rows:
+        for xcol, xlabel in (("nfev", "f-evaluations (nfev)"),
+                             ("wall_ms", "wall time (ms, integration only)")):
+            panel = Panel(xscale="log", yscale="log", xlabel=xlabel, ylabel=label, grid=True)
             for fam in fams:
                 part = ok[ok["family"] == fam]
                 x, y = part[xcol].to_numpy(float), part[col].to_numpy(float)
@@ -68,30 +71,23 @@ def wp_figures(problem: str, cells, wall_by_cell: dict[int, float], out_dir: Pat
                 # in sweep order (coarse to fine): noisy wall times then show as they are
                 order = np.argsort(-part["sweep_value"].to_numpy(float)[good], kind="stable")
                 st = style[fam]
-                ax.plot(x[good][order], y[good][order], color=st["color"],
-                        linestyle=st["linestyle"], marker=st["marker"], markersize=4,
-                        linewidth=1.2, label=fam if len(fam) <= 40 else fam[:37] + "…")
-            ax.set_xscale("log")
-            ax.set_yscale("log")
-            ax.grid(True, which="major", alpha=0.3)
-            ax.set_xlabel(xlabel)
-            ax.set_ylabel(label)
-    axes[0][0].set_title("against f-evaluations", fontsize=10)
-    axes[0][1].set_title("against wall time", fontsize=10)
+                panel.series.append(Series(x[good][order], y[good][order], {
+                    "color": st["color"], "linestyle": st["linestyle"], "marker": st["marker"],
+                    "markersize": 4, "linewidth": 1.2,
+                    "label": fam if len(fam) <= 40 else fam[:37] + "…"}))
+            panels.append(panel)
+    panels[0].title, panels[1].title = "against f-evaluations", "against wall time"
     name = problem if len(problem) <= 60 else problem[:57] + "…"
-    fig.suptitle(f"{name}: work-precision", fontsize=11, x=0.42, y=0.995)
-    handles, labels = [], []
-    for ax in axes.ravel():
-        for h, lab in zip(*ax.get_legend_handles_labels()):
-            if lab not in labels:
-                handles.append(h)
-                labels.append(lab)
-    if handles:
-        fig.legend(handles, labels, loc="upper right", bbox_to_anchor=(1.0, 0.955), fontsize=7.5,
-                   framealpha=0.9)
-    layout(fig, len(rows), right=0.78 if handles else 0.98)
-    fig.subplots_adjust(top=1 - 0.75 / fig.get_size_inches()[1])
-    file = _save(fig, out_dir, f"{prefix}-work-precision.png")
+    labelled = any(s.style.get("label") for p in panels for s in p.series)
+    size = (12.4, 3.9 * len(rows) + 0.6)
+    adjust = layout(size, len(rows), right=0.78 if labelled else 0.98)
+    adjust["top"] = 1 - 0.75 / size[1]
+    plot = Plot(size, len(rows), 2, panels, adjust, suptitle=f"{name}: work-precision",
+                suptitle_style={"fontsize": 11, "x": 0.42, "y": 0.995},
+                legend={"loc": "upper right", "bbox_to_anchor": (1.0, 0.955), "fontsize": 7.5,
+                        "framealpha": 0.9})
+    file = f"{prefix}-work-precision.png"
+    jobs.append(Job(plot, out_dir / file))
     words = ", ".join(label for _, label in rows)
     cap = (f"Work-precision: {words} against cost (left: f-evaluations, right: wall time), one "
            "curve per method family (its sweep of h or tolerance); squares: fixed step, circles: "
@@ -101,6 +97,4 @@ def wp_figures(problem: str, cells, wall_by_cell: dict[int, float], out_dir: Pat
     if missing:
         cap += (" " + ", ".join(missing) + " do not count f-evaluations: they appear on the "
                 "wall-time panels only.")
-    out = [Figure(f"{slug}/{file}", f"{problem}: error against cost", cap)]
-    plt.close("all")
-    return out
+    return [Figure(f"{slug}/{file}", f"{problem}: error against cost", cap)]

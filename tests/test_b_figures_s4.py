@@ -110,8 +110,8 @@ def test_apsides_closed_form():
 
 
 def test_quick_scale_verdicts(tmp_path, capsys):
-    """Every claim added for §2-§4 has its expected verdict at the quick scale, or is not
-    checkable there (scale = "paper", or an aggregate)."""
+    """Every claim added for §2-§4 has its expected outcome at the quick scale, or is skipped
+    there (scale = "paper")."""
     code = main(["verify", *CLAIMS, "--scale", "quick", "-o", str(tmp_path), "-j", "1", "--no-report",
                  "--format", "json"])
     captured = capsys.readouterr()
@@ -121,10 +121,10 @@ def test_quick_scale_verdicts(tmp_path, capsys):
     assert set(rows) == set(CLAIMS)
     for cid, row in rows.items():
         claim = ledger[cid]
-        if claim.scale == "paper" or claim.not_checkable:
-            assert row["verdict"] == "not checkable", cid
+        if claim.scale == "paper":
+            assert row["verdict"] == "skipped", cid
         else:
-            assert row["verdict"] == claim.expected, (cid, row["measured_text"], row["detail"])
+            assert row["outcome"] == claim.expected, (cid, row["verdict"], row["detail"])
     assert rows["B-4.1-e"]["measured"] == 1.0
     assert rows["B-3-d"]["verdict"] == "reproduced"
     for cid in ("B-4.1-a", "B-4.1-b", "B-4.1-c", "B-4.1-d", "B-4.1-f", "B-4.1-g", "B-4.1-h",
@@ -140,5 +140,4 @@ def test_paper_scale_verdicts(tmp_path, capsys):
     assert code == 0, captured.err
     ledger = load_ledger()
     for row in json.loads(captured.out):
-        if not ledger[row["id"]].not_checkable:
-            assert row["verdict"] == ledger[row["id"]].expected, (row["id"], row["measured_text"])
+        assert row["outcome"] == ledger[row["id"]].expected, (row["id"], row["measured"])

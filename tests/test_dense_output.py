@@ -19,9 +19,10 @@ from gnibench.methods import order_conditions as oc
 from gnibench.methods.dense_output import _quotients
 from gnibench.methods.embedded_rk import DOP853, DOPRI5
 from gnibench.methods.high_order_rk import VERN6, VERN7, VERN8, VERN9
-from gnibench.suite.cell.calls import COUNTERS
+from gnibench.suite.cell.calls import Buffers
 from gnibench.suite.cell.codegen import load
-from gnibench.suite.cell.compiled import STATE, compile_cell, dense_output_refusal
+from gnibench.suite.cell.compiled import dense_output_refusal
+from gnibench.suite.cell.drivers import AdaptiveDriver
 from gnibench.suite.cell.solve import solve
 from gnibench.suite.cell.spec import parse_method, parse_problem, prepare
 from gnibench.suite.cli.main import main
@@ -130,14 +131,13 @@ def test_interpolant_order(kepler, method, h0):
 def test_recomputed_step_is_the_drivers(method):
     """dense_coeffs(y_n, h_n) ends on the driver's y_n+1 bit for bit, at every accepted step."""
     prob, cfg = prepare("kepler-2d", f"{method}:rtol=1e-10,atol=1e-10")
-    cell = compile_cell(prob, cfg)
-    v, rows, t_end = cfg.base.values, 4096, 6 * math.pi
-    t, Y, C = np.empty(rows), np.empty((rows, 4)), np.zeros((rows, COUNTERS))
-    y_io, st = np.array([cell.y0, np.zeros(4)]), np.zeros(STATE)
-    code, n = cell.kernel.integrate_adaptive(y_io, st, cell.par, t_end, v["h0"], t_end, v["rtol"],
-                                             v["atol"], 1, 0.0, 0, v["max_steps"], 1 << 40, t, Y, C)
-    t, Y, H = t[:n], Y[:n], C[:n, 4]             # the 5th column: size of the step ending there
-    assert code == 0 and len(t) > 50 and H[0] == 0.0 and np.all(H[1:] > 0)
+    drv = AdaptiveDriver(prob, cfg, "integrate_adaptive", 6 * math.pi)
+    buffers = Buffers(4096, 4, grow=False)
+    code, _ = drv.run(buffers, budget=None)
+    cell = drv.cell
+    t, Y, C = buffers.arrays()
+    H = C[:, 4]                                  # the 5th column: size of the step ending there
+    assert code == "ok" and len(t) > 100 and H[0] == 0.0 and np.all(H[1:] > 0)
     for n in range(len(t) - 1):
         y = tuple(Y[n])
         y1, _ = cell.kernel.dense_coeffs(y, float(H[n + 1]), cell.par, cell.kernel.f(y, cell.par))

@@ -79,11 +79,14 @@ def test_representative_claims_have_their_expected_verdicts(tmp_path, capsys):
     captured = capsys.readouterr()
     rows = {r["id"]: r for r in json.loads(captured.out)}
     assert code == 0, [(i, r["verdict"], r["detail"]) for i, r in rows.items()
-                       if r["verdict"] != r["expected"]]
+                       if r["outcome"] != r["expected"]]
     assert set(rows) == set(CLAIMS)
     for r in rows.values():
-        assert r["verdict"] == r["expected"], (r["id"], r["verdict"], r["detail"])
-    assert rows["HLW-2.4-b"]["verdict"] == "not reproduced"          # Newton fails near the sun
+        assert r["outcome"] == r["expected"], (r["id"], r["verdict"], r["detail"])
+    # implicit Euler has no solution near the sun (Newton stops there, margin > 0); [HLW]'s picture
+    # comes from the non-converged fixed-point iteration: Jupiter first, then Saturn, thrown away
+    assert rows["HLW-2.4-b"]["verdict"] == "partly" and "margin = 0.09" in rows["HLW-2.4-b"]["detail"]
+    assert any("newton_failed" in x for x in rows["HLW-2.4-b"]["runs"])
     assert rows["HLW-2.1-table-G-SE"]["verdict"] == "partly"          # O(t h²) from (2.11)
     assert rows["HLW-1.1-b"]["measured"] <= 1e-9
     assert rows["HLW-2.3-d"]["measured"] > 0                          # midpoint anticlockwise
@@ -149,5 +152,5 @@ def test_paper_scale_verdicts(tmp_path, capsys):
     code = main(["verify", *ids, "--scale", "paper", "-o", str(tmp_path / "v"), "-j", "1", "--no-report",
                  "--format", "json"])
     rows = {r["id"]: r for r in json.loads(capsys.readouterr().out)}
-    assert code == 0, [(i, r["verdict"]) for i, r in rows.items() if r["verdict"] != r["expected"]]
+    assert code == 0, [(i, r["verdict"]) for i, r in rows.items() if r["outcome"] != r["expected"]]
     assert all(r["verdict"] != "not checkable" for r in rows.values())

@@ -38,12 +38,17 @@ def _inventory() -> list[str]:
 
 
 def test_the_ledger_covers_the_inventory_exactly():
-    """One entry per claim of CLAIMS.md (132), no more, no less."""
+    """One entry per claim of CLAIMS.md (132), no more, no less — besides the corrected relations
+    of the seeds' slips, ``<id>.corrected``, each beside the entry of its printed claim."""
     inventory, ledger = _inventory(), load_ledger()
     assert len(inventory) == len(set(inventory)) == 132
     missing = [i for i in inventory if i not in ledger]
-    extra = [i for i in ledger if i not in inventory]
+    corrected = [i for i in ledger if i.endswith(".corrected")]
+    extra = [i for i in ledger if i not in inventory and i not in corrected]
     assert not missing and not extra, f"missing {missing}, not in the inventory {extra}"
+    orphans = [i for i in corrected if i.removesuffix(".corrected") not in inventory]
+    assert not orphans, f"corrected entries without their printed claim: {orphans}"
+    assert corrected, "the policy on slips: at least the slips of CLAIMS.md Part 4 are corrected"
 
 
 def test_the_inventory_is_that_of_claims_md():

@@ -3,9 +3,9 @@ a method is symmetric if Φ_h^* = Φ_h, i.e. Φ_{-h} = Φ_h^{-1}).
 
 Test: integrate N = 1000 steps of h from y0, then N steps of -h from the final point, and require
 the return to y0 to round-off. Negative steps are not allowed by the method specs (h > 0 is
-validated), so the compiled cell is driven directly: ``gnibench.suite.cell.compiled.compile_cell`` loads the
-module and builds ``par`` exactly as ``solve`` does, and its ``integrate(y0, par, h, ...)`` takes
-any h. (Reversing the momenta, p -> -p, would test ρ-reversibility instead, which needs a
+validated); the driver facade integrates backward with ``reverse=True`` (steps of -h), from the
+point reached given as the problem's initial values (``<state>0`` options, exact by repr).
+(Reversing the momenta, p -> -p, would test ρ-reversibility instead, which needs a
 ρ-reversible problem *and* a symmetric method; stepping with -h tests the symmetry of the method
 alone, on every problem it accepts, Hamiltonian or not.)
 
@@ -36,7 +36,7 @@ import numpy as np
 import pytest
 from gnibench import methods
 from gnibench.problems import REGISTRY
-from gnibench.suite.cell.compiled import FIXED_STATE, compile_cell
+from gnibench.suite.cell.driver import integrate
 from gnibench.suite.cell.spec import prepare
 from gnibench.suite.foundation.errors import UserError
 from support import cap, rate_scale
@@ -81,20 +81,16 @@ def forth_and_back(pid: str, mid: str, steps: int = STEPS) -> tuple[float, float
     """(|y_back - y0|_∞ / scale, |y_N - y0|_∞ / scale), scale = max(|y0|_∞, |y_N|_∞)."""
     h = 0.05 / rate_scale(pid)
     problem, cfg = prepare(pid, f"{mid}:h={h!r}")
-    cell = compile_cell(problem, cfg)
-    n = problem.record.dim
 
-    def run(y, hh):
-        out_t, out_y, out_c = np.empty(4), np.empty((4, n)), np.zeros((4, 5))
-        y_io, st = np.array([y, np.zeros(n)], dtype=np.float64), np.zeros(FIXED_STATE)
-        code, rows = cell.kernel.integrate(y_io, st, cell.par, hh, steps, hh, steps, 0.0, 0,
-                                           1 << 40, out_t, out_y, out_c)
-        assert code == 0 and st[0] == steps, (pid, mid, hh, code, st[0])
-        return out_y[rows - 1].copy()
+    def run(bound, reverse):
+        traj = integrate(bound, cfg, steps=steps, every=steps, reverse=reverse)
+        assert traj.status == "ok" and traj.steps[-1] == steps, (pid, mid, reverse, traj.status)
+        return traj.y[-1].copy()
 
-    y0 = np.array(cell.y0, dtype=np.float64)
-    yn = run(y0, h)
-    back = run(yn, -h)
+    y0 = np.array(problem.record.y0(problem.values), dtype=np.float64)
+    yn = run(problem, False)
+    start = ",".join(f"{s}0={float(v)!r}" for s, v in zip(problem.record.state, yn))
+    back = run(prepare(f"{pid}:{start}", f"{mid}:h={h!r}")[0], True)
     scale = max(np.max(np.abs(y0)), np.max(np.abs(yn)))
     return float(np.max(np.abs(back - y0)) / scale), float(np.max(np.abs(yn - y0)) / scale)
 

@@ -1,65 +1,90 @@
-"""Adaptive driver (template): Hairer's step-size control as in DOPRI5/DOP853 (HNW I, §II.4).
+"""The adaptive driver (template): one resumable loop for every adaptive method.
 
-err = ||h Σ e_j k_j / sk||_rms with sk_i = atol + rtol max(|y_i|, |y1_i|) (DOP853: its combined
-3rd/5th-order estimate); accepted if err <= 1. New step h / fac, with
-fac = clip(err^EXPO / facold^BETA / SAFE, 1/FAC2, 1/FAC1); after a rejection the next step is not
-larger than the rejected one; |h| <= hmax; the last step lands exactly on t_end. The initial step is
-Hairer's HINIT heuristic when h0 = 0.
+The embedded pairs (Hairer's DOPRI5/DOP853 control, HNW I §II.4; methods/kernels/pair.py) and
+GBS extrapolation (ODEX's order and step control, HNW I §II.9; methods/kernels/extrapolation.py)
+share this loop; what differs is the family's attempt and its step-size controller, kept apart as
+diffrax keeps ``AbstractStepSizeController`` apart from the solver. Each family's module binds:
 
-The driver is resumable: its whole state lives in ``y_io`` (y, f(y)) and ``st`` so Python can empty
-a full output buffer and call again without changing a single operation (status 5).
+* ``adaptive_ws()``: per-call scratch (odex: its tableau T, H_j, W_j and the attempt's
+  parameters and outcome; pairs: none);
+* ``controller_init(y, fy, par, h0, hmax, rtol, atol, t_end) -> (h, nfev, cs)``: the first step
+  (h0, or Hairer's HINIT below) and the controller's state cs (pairs: facold; odex: the order k);
+  ``controller_state(x)``: cs from its slot ``ST_CONTROL``; ``controller_clip(h, hmax)``: the
+  attempt's size within hmax (odex; the pairs' controller keeps it there already);
+  ``controller_prepare(ws, cs, first, last, reject, hmax)``: what the attempt needs to know of
+  the controller (odex: the order k and which lines to compute; pairs: nothing);
+* ``attempt(y, e, fy, h, par, ws, rtol, atol) -> (y1, e1, err, f1)``: one attempt of size h
+  from y (fy = f(y); ``attempt_stages`` also returns the stages, for dense output), ``f1`` being
+  f(y1) when the pair has it (FSAL), and ``attempt_outcome(ws, err) -> (kc, nfev, verdict)``:
+  odex's lines used, the f-evaluations, ``ACCEPT``, ``REJECT`` or ``UNSTABLE`` (odex's stability
+  check: redo with a smaller step). The pairs' attempt is a generated function of few arguments
+  and their outcome a constant: a wider call cost 2-4 % of dopri5's time per attempt (measured);
+* ``controller_accept(h, cs, err, reject, kc, ws, hmax) -> (h_new, cs)`` and
+  ``controller_reject(h, cs, err, verdict, kc, ws, nacc) -> (h_new, cs, counted)``;
+* ``partial_adaptive``: its own step of a given size, for time-grid samples (``grid_rows``).
 
-Samples: every ``every`` accepted steps plus the final point. The same template is generated in
-specialised copies, each flag a literal (``template`` renaming, as for every variant below), so
-that the plain driver compiles without the others' code (one driver carrying both the plain and
+The loop: ``STATUS_STEP_TOO_SMALL`` when 0.1 |h| <= |t| eps; the last step lands
+exactly on t_end (t + 1.01 h > t_end: h = t_end - t); after an accepted step the step modifiers
+(``project``) and the problem's ``post_step`` map y_n+1, f(y_n+1) is the FSAL stage or evaluated,
+and the step's samples are written: every ``every`` accepted steps plus the final point, or the
+time grid (``grid_rows``), or the section crossings (``section_rows``;
+methods/kernels/sampling.py). Under ``sum=compensated`` (``COMPENSATED``) the attempt adds its
+increment with the carried error e of y, t is summed with its carried error e_t, and the last step
+is (t_end - t) - e_t ([HLW] VIII.5; methods/summation.py).
+
+The driver is resumable: its whole state lives in ``y_io`` (y, f(y), the carry of y) and ``st``
+(the named slots of methods/kernels/slots.py), so Python can empty a full output buffer or show
+progress and call again without changing a single operation (``STATUS_BUFFER_FULL``,
+``STATUS_PAUSED`` after ``budget`` attempts). When a step's grid samples do not fit the buffer, the
+step is undone (y, its carry, t, h, the controller's state, counters) and redone by the next call.
+
+The same template is generated in specialised copies, each flag a literal (``variant`` renaming),
+so that the plain driver compiles without the others' code (one driver carrying both the plain and
 the dense-output loops took 50 % longer to compile, measured on kepler-3d):
 
-* ``integrate_dense`` (``DENSE_OUTPUT``, pairs with a continuous extension, methods/dense_output.py):
-  samples on the grid t_k = k dt_out for k = 0, every, 2 every, ... < ``n_out`` plus the final
-  point t_end, filled by dense output as Hairer's SOLOUT does (HNW I §II.6): after each accepted
-  step that contains grid points, the step's continuous extension is formed from its stages
-  (DOP853: 3 more f-evaluations, counted in nfev; DOPRI5: none) and evaluated there. The steps are
-  the same: ``step_stages`` runs the very operations of ``step_err``.
-* ``adaptive_grid`` (``GRID``): the same grid by partial steps of the pair itself from y_n
-  (``partial_adaptive``; methods/kernels/events.py), for pairs without a continuous extension or
-  whose accepted points are not its endpoints (projection, post_step).
-* ``adaptive_section`` (``SECTION``) and ``adaptive_section_dense`` (``SECTION_DENSE`` too): a
-  Poincaré section crossing in each accepted step is located by Hénon's trick, or on the step's
-  continuous extension formed from the stages at hand (no recomputation), and written with the
-  counters of its step; the run stops with ``STATUS_OK`` after ``st[ST_WANTED]`` crossings.
+* ``integrate_adaptive``: a sample every ``every`` accepted steps plus the final point; with a
+  5th column in ``out_c``, the size of the step ending at each sample (tests/test_dense_output.py);
+* ``integrate_dense`` (``DENSE_OUTPUT``, ``GRIDDED``, ``WITH_STAGES``; pairs with a continuous
+  extension, methods/dense_output.py): the grid t_k = k dt_out (k = 0, every, ... < ``n_out``) plus
+  t_end by dense output, as Hairer's SOLOUT does (HNW I §II.6), the steps unchanged;
+* ``adaptive_grid`` (``GRID``, ``GRIDDED``): the same grid by partial steps (pairs without an
+  extension or whose accepted points are not its endpoints, odex);
+* ``adaptive_section`` (``SECTION``) and ``adaptive_section_dense`` (``SECTION_DENSE``,
+  ``WITH_STAGES``): Poincaré section crossings by Hénon's trick or on the step's extension; the run
+  stops with ``STATUS_OK`` after ``st[ST_WANTED]`` crossings.
 
-A grid point t_k within GRID_ULPS ulps of a step end is that step end. When a step's grid samples
-do not fit the output buffer, the step is undone and redone by the next call (same operations).
 With ``st[ST_TCOMP]`` = i >= 0 the grid's time is the state component i (the physical time t of a
-transformed problem, K-S) instead of the integration variable: located by Newton on the extension
-(``dense_root_time``) or by the secant method on the partial step size.
+transformed problem, K-S) instead of the integration variable.
 """
 from __future__ import annotations
 
 import math
 
 from gnibench.methods.kernels.free import (
-    BETA,
-    DENSE_NFEV,
-    DENSE_OUTPUT,
-    EXPO,
-    FAC1,
-    FAC2,
+    ACCEPT,
+    COMPENSATED,
     FSAL,
-    GRID_ULPS,
     GRIDDED,
     IORD,
-    SAFE,
+    ROW_CARRY,
+    ROW_F,
+    ROW_Y,
     SECTION,
-    SECTION_DENSE,
+    ST_CONTROL,
     ST_FOUND,
+    ST_H,
     ST_KOUT,
-    ST_LOC_NFEV,
-    ST_NEWTON,
+    ST_LAST_ROW,
+    ST_NFEV,
+    ST_REJECT,
+    ST_REJECTED,
     ST_ROLLBACKS,
+    ST_STARTED,
+    ST_STEPS,
+    ST_T,
+    ST_T_CARRY,
     ST_TCOMP,
     ST_WANTED,
-    STAGES_NEW,
     STATUS_BUFFER_FULL,
     STATUS_MAX_STEPS,
     STATUS_OK,
@@ -67,21 +92,26 @@ from gnibench.methods.kernels.free import (
     STATUS_STEP_TOO_SMALL,
     WITH_STAGES,
     N,
+    adaptive_ws,
+    attempt,
+    attempt_outcome,
+    attempt_stages,
+    carry_sum,
+    carry_zero,
+    controller_accept,
+    controller_clip,
+    controller_init,
+    controller_prepare,
+    controller_reject,
+    controller_state,
     crosses,
-    dense_crossing,
-    dense_eval,
-    dense_from_stages,
-    dense_root_time,
     f,
-    grid_sample_adaptive,
-    henon_crossing,
+    grid_rows,
     post_step,
     project,
     record_row,
-    section_event,
     section_g_0,
-    step_err,
-    step_stages,
+    section_rows,
     store,
     to_tuple,
     to_tuple_shift,
@@ -118,56 +148,45 @@ def first_step(y, fy, par, h0, hmax, rtol, atol):
     return initial_step(y, fy, par, hmax, rtol, atol), 2.0
 
 
-def dense_coeffs(y, h, par, fy):
-    """The accepted step from y of size h (fy = f(y)), recomputed by the operations of step_err
-    (so y1 is the driver's, bit for bit), and its continuous extension: (y1, (y0, F0, F1, ...))."""
-    y1, _, f1, ks = step_stages(y, h, par, fy, 1.0, 1.0)
-    if not FSAL:
-        f1 = f(y1, par)
-    return y1, dense_from_stages(y, y1, h, par, ks, f1)
-
-
-def partial_adaptive(y, fy, sigma, par, ws, k):
-    """A partial step of an embedded pair: its own step of size sigma from y (fy = f(y)), the error
-    estimate unused (time grid without dense output)."""
-    y1, _, _ = step_err(y, sigma, par, fy, 1.0, 1.0)
-    return y1, STAGES_NEW, 0.0, STATUS_OK
-
-
 def integrate_adaptive(y_io, st, par, t_end, h0, hmax, rtol, atol, every, dt_out, n_out, max_steps,
                        budget, out_t, out_y, out_c):
-    # st: t, h, facold, reject, nacc, nrej, nfev, started, last_row_step; slots of
-    # methods/kernels/slots.py (grid: next grid index, time component; sections: crossings found
-    # and wanted, statistics). out_c: steps, nfev, njev, rejected and, if it has a 5th column, the
-    # size of the accepted step that ends at the sample (tests/test_dense_output.py).
     # dt_out, n_out: the time grid (integrate_dense, adaptive_grid; the others ignore them)
-    y = to_tuple(y_io[0])
+    ws = adaptive_ws()
+    y = to_tuple(y_io[ROW_Y])
+    if COMPENSATED:
+        e = to_tuple(y_io[ROW_CARRY])
+    else:
+        e = 0.0                            # no carry: sum=plain
     rows = out_t.shape[0]
     with_h = out_c.shape[1] > 4
     row = 0
-    if st[7] == 0.0:
+    if st[ST_STARTED] == 0.0:
         fy = f(y, par)
-        st[1], st[6] = first_step(y, fy, par, h0, hmax, rtol, atol)
-        st[0] = 0.0
-        st[2] = 1.0e-4
-        st[7] = 1.0
+        h, nf, cs = controller_init(y, fy, par, h0, hmax, rtol, atol, t_end)
+        st[ST_H] = h
+        st[ST_NFEV] = nf
+        st[ST_CONTROL] = cs
+        st[ST_T] = 0.0
+        st[ST_T_CARRY] = 0.0
+        st[ST_REJECT] = 0.0
+        st[ST_STARTED] = 1.0
         if not SECTION:                    # a section run writes crossings only
-            record_row(out_t, out_y, out_c, 0, 0.0, y, 0.0, st[6], 0.0, 0.0)
+            record_row(out_t, out_y, out_c, 0, 0.0, y, 0.0, st[ST_NFEV], 0.0, 0.0)
             if with_h:
                 out_c[0, 4] = 0.0
             row = 1
         if GRIDDED:
             st[ST_KOUT] = every
     else:
-        fy = to_tuple(y_io[1])
-    t, h, facold = st[0], st[1], st[2]
-    reject = st[3] != 0.0
-    nacc, nrej, nfev = int(st[4]), int(st[5]), st[6]
+        fy = to_tuple(y_io[ROW_F])
+    t, et, h = st[ST_T], st[ST_T_CARRY], st[ST_H]
+    cs = controller_state(st[ST_CONTROL])
+    reject = st[ST_REJECT] != 0.0
+    nacc, nrej, nfev = int(st[ST_STEPS]), int(st[ST_REJECTED]), st[ST_NFEV]
     kout = int(st[ST_KOUT]) if GRIDDED else 0
     tc = int(st[ST_TCOMP]) if GRIDDED else -1
     g0 = section_g_0(y, par) if SECTION else 0.0
     status = STATUS_OK
-    last = False
     stop = nacc + nrej + budget              # attempts in this call (STATUS_PAUSED after them)
     while True:
         if row >= rows or (GRIDDED and rows - row < 2):
@@ -179,152 +198,119 @@ def integrate_adaptive(y_io, st, par, t_end, h0, hmax, rtol, atol, every, dt_out
         if nacc + nrej >= stop:
             status = STATUS_PAUSED
             break
+        # the state before this attempt: a gridded step whose samples do not fit is redone
+        h_start, cs_start, reject_start, nrej_start, nfev_start = h, cs, reject, nrej, nfev
+        h = controller_clip(h, hmax)
         if 0.1 * abs(h) <= abs(t) * 2.220446049250313e-16 or not h > 0.0:
             status = STATUS_STEP_TOO_SMALL
             break
-        # the state before this attempt: a gridded step whose samples do not fit is redone
-        h_start, facold_start, reject_start, nrej_start, nfev_start = h, facold, reject, nrej, nfev
+        last = False
         if t + 1.01 * h - t_end > 0.0:
-            h = t_end - t
+            h = (t_end - t) - et if COMPENSATED else t_end - t
             last = True
+        controller_prepare(ws, cs, nacc + nrej == 0, last, reject, hmax)
         if WITH_STAGES:
-            y1, err, f1, ks = step_stages(y, h, par, fy, rtol, atol)
+            y1, e1, err, f1, ks = attempt_stages(y, e, fy, h, par, ws, rtol, atol)
         else:
-            y1, err, f1 = step_err(y, h, par, fy, rtol, atol)
-        nfev += STAGES_NEW
-        fac11 = err ** EXPO
-        fac = fac11 / facold ** BETA
-        fac = max(1.0 / FAC2, min(1.0 / FAC1, fac / SAFE))
-        hnew = h / fac
-        if err <= 1.0:
-            y1, pst = project(y1, par)
-            if pst != STATUS_OK:
-                status = pst
-                break
-            facold = max(err, 1.0e-4)
-            nacc += 1
-            t_old = t
-            t = t_end if last else t + h
-            y2 = post_step(y1, par)
-            fy_old = fy
-            if FSAL and y2 == y1:
-                fy = f1
-            else:
-                fy = f(y2, par)
-                nfev += 1.0
-            y_old = y
-            y = y2
-            if abs(hnew) > hmax:
-                hnew = hmax
-            if reject:
-                hnew = min(abs(hnew), abs(h))
-            reject = False
-            if SECTION:
-                g1 = section_g_0(y, par)
-                if crosses(g0, g1):
-                    if SECTION_DENSE:
-                        # fy = f(y1): dense output is refused with projection or post_step
-                        cf = dense_from_stages(y_old, y1, h, par, ks, fy)
-                        nfev += DENSE_NFEV
-                        st[ST_LOC_NFEV] += DENSE_NFEV
-                        ys, ts, it = dense_crossing(cf, y_old, t_old, g0, y, t, g1, h, par)
-                        st[ST_NEWTON] = max(st[ST_NEWTON], it)
-                    else:
-                        ys, ts, nf = henon_crossing(y_old, t_old, t, par, st)
-                        nfev += nf
-                    row += section_event(ys, ts, par, st, out_t, out_y, out_c, row, nacc, nfev,
-                                         0.0, nrej)
-                    if st[ST_FOUND] >= st[ST_WANTED]:
-                        h = hnew
-                        break
-                g0 = g1
-            elif GRIDDED:
-                # samples at t_k = k dt_out in this step; with tc >= 0 the grid's time is the state
-                # component tc (the physical time of a transformed problem)
-                t_hi = t if tc < 0 else y[tc]
-                tol = GRID_ULPS * 2.220446049250313e-16 * abs(t_hi)
-                row_start = row
-                kout_start = kout
-                full = False
-                tk = kout * dt_out
-                if kout < n_out and (tk < t_hi - tol or (not last and tk <= t_hi + tol)):
-                    if DENSE_OUTPUT:
-                        # fy = f(y1): dense output is refused with projection or post_step
-                        cf = dense_from_stages(y_old, y1, h, par, ks, fy)
-                        nfev += DENSE_NFEV
-                    while kout < n_out and (tk < t_hi - tol or (not last and tk <= t_hi + tol)):
-                        if row >= rows - 1:
-                            full = True
-                            break
-                        if abs(tk - t_hi) <= tol:
-                            yk = y
-                            sk = t if tc >= 0 else tk
-                        elif DENSE_OUTPUT:
-                            if tc < 0:
-                                yk = dense_eval(cf, (tk - t_old) / h)
-                                sk = tk
-                            else:
-                                theta, yk, _ = dense_root_time(cf, par, tc, tk, y_old[tc] - tk,
-                                                               dense_eval(cf, 1.0)[tc] - tk,
-                                                               abs(t_hi - tk), y)
-                                sk = t if theta == 1.0 else t_old + theta * h
-                        else:
-                            yk, sk, nf, _, s = grid_sample_adaptive(y_old, fy_old, t_old, y, t, h,
-                                                                    tk, tc, par, 0, 0)
-                            nfev += nf
-                            if s != STATUS_OK:
-                                status = s
-                                break
-                        record_row(out_t, out_y, out_c, row, sk, yk, nacc, nfev, 0.0, nrej)
-                        row += 1
-                        kout += every
-                        tk = kout * dt_out
-                if full:                   # redo this step in the next call, with a new buffer
-                    y = y_old
-                    fy = fy_old
-                    t = t_old
-                    h, facold, reject, nrej, nfev = (h_start, facold_start, reject_start,
-                                                     nrej_start, nfev_start)
-                    nacc -= 1
-                    kout = kout_start
-                    row = row_start
-                    last = False
-                    st[ST_ROLLBACKS] += 1.0
-                    status = STATUS_BUFFER_FULL
-                    break
-                if status != STATUS_OK:
-                    break
-                if last:
-                    record_row(out_t, out_y, out_c, row, t, y, nacc, nfev, 0.0, nrej)
-                    row += 1
-                    st[8] = nacc
-            elif nacc % every == 0 or last:
-                record_row(out_t, out_y, out_c, row, t, y, nacc, nfev, 0.0, nrej)
-                if with_h:
-                    out_c[row, 4] = h
-                row += 1
-                st[8] = nacc
-            if last:
-                break
-            h = hnew
-        else:
-            hnew = h / min(1.0 / FAC1, fac11 / SAFE)
+            y1, e1, err, f1 = attempt(y, e, fy, h, par, ws, rtol, atol)
+            ks = 0
+        kc, nf, verdict = attempt_outcome(ws, err)
+        nfev += nf
+        if verdict != ACCEPT:
+            h, cs, counted = controller_reject(h, cs, err, verdict, kc, ws, nacc)
             reject = True
-            if nacc >= 1:
+            if counted:
                 nrej += 1
-            last = False
-            h = hnew
+            continue
+        y1p, pst = project(y1, par)
+        if pst != STATUS_OK:
+            status = pst
+            break
+        nacc += 1
+        t_old = t
+        et_old = et
+        h_acc = h
+        if last:
+            t = t_end
+            et = 0.0
+        elif COMPENSATED:
+            t, et = carry_sum(t, et, h)
+        else:
+            t = t + h
+        y2 = post_step(y1p, par)
+        fy_old = fy
+        if FSAL and y2 == y1:            # f1 = f(y1): stale once y1 is moved
+            fy = f1
+        else:
+            fy = f(y2, par)
+            nfev += 1.0
+        y_old = y
+        y = y2
+        e_old = e
+        if COMPENSATED:                  # a moved point drops the carry (methods/summation.py)
+            e = e1 if y2 == y1 else carry_zero(e1)
+        h, cs = controller_accept(h, cs, err, reject, kc, ws, hmax)
+        reject = False
+        if SECTION:
+            g1 = section_g_0(y, par)
+            if crosses(g0, g1):
+                wrote, nfev = section_rows(y_old, e_old, t_old, et_old, g0, y, t, g1, h_acc, par,
+                                           st, ks, fy, out_t, out_y, out_c, row, nacc, nfev, 0.0,
+                                           nrej)
+                row += wrote
+                if st[ST_FOUND] >= st[ST_WANTED]:
+                    break
+            g0 = g1
+        elif GRIDDED:
+            # samples at t_k = k dt_out in this step; with tc >= 0 the grid's time is the state
+            # component tc (the physical time of a transformed problem)
+            row_start = row
+            kout_start = kout
+            row, kout, nfev, _, status, full = grid_rows(
+                y_old, e_old, fy_old, t_old, et_old, y, t, h_acc, last, kout, tc, dt_out, n_out,
+                every, par, ws, kc, ks, fy, out_t, out_y, out_c, row, nacc, nfev, 0.0, nrej)
+            if full:                       # redo this step in the next call, with a new buffer
+                y = y_old
+                e = e_old
+                fy = fy_old
+                t = t_old
+                et = et_old
+                h, cs, reject, nrej, nfev = h_start, cs_start, reject_start, nrej_start, nfev_start
+                nacc -= 1
+                kout = kout_start
+                row = row_start
+                last = False
+                st[ST_ROLLBACKS] += 1.0
+                status = STATUS_BUFFER_FULL
+                break
+            if status != STATUS_OK:
+                break
+            if last:
+                record_row(out_t, out_y, out_c, row, t, y, nacc, nfev, 0.0, nrej)
+                row += 1
+                st[ST_LAST_ROW] = nacc
+        elif nacc % every == 0 or last:
+            record_row(out_t, out_y, out_c, row, t, y, nacc, nfev, 0.0, nrej)
+            if with_h:
+                out_c[row, 4] = h_acc
+            row += 1
+            st[ST_LAST_ROW] = nacc
+        if last:
+            break
     if not SECTION and status != STATUS_OK and status != STATUS_BUFFER_FULL \
-            and status != STATUS_PAUSED and nacc > st[8] and row < rows:
+            and status != STATUS_PAUSED and nacc > st[ST_LAST_ROW] and row < rows:
         record_row(out_t, out_y, out_c, row, t, y, nacc, nfev, 0.0, nrej)
         if with_h:
             out_c[row, 4] = 0.0                 # not a sample of every step: no step size
         row += 1
-    store(y, y_io, 0)
-    store(fy, y_io, 1)
-    st[0], st[1], st[2] = t, h, facold
-    st[3] = 1.0 if reject else 0.0
-    st[4], st[5], st[6] = nacc, nrej, nfev
+    store(y, y_io, ROW_Y)
+    store(fy, y_io, ROW_F)
+    if COMPENSATED:
+        store(e, y_io, ROW_CARRY)
+    st[ST_T], st[ST_T_CARRY], st[ST_H] = t, et, h
+    st[ST_CONTROL] = cs
+    st[ST_REJECT] = 1.0 if reject else 0.0
+    st[ST_STEPS], st[ST_REJECTED], st[ST_NFEV] = nacc, nrej, nfev
     if GRIDDED:
         st[ST_KOUT] = kout
     return status, row

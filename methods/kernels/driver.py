@@ -6,35 +6,48 @@ Samples every ``every`` steps plus the final point; stops at the first failed st
 (``STATUS_NEWTON_FAILED`` from Newton or a projection) or non-finite state
 (``STATUS_NONFINITE``), keeping every sample taken so far plus the last good point.
 
-The driver is resumable, like the adaptive ones: its whole state lives in ``y_io`` (row 0: the
-current state) and ``st`` (steps done, nfev, njev, step of the last sample, started), so the
-facade (:mod:`gnibench.suite.cell.driver`) can call it again and again: it returns
+The driver is resumable, like the adaptive one: its whole state lives in ``y_io`` and ``st``
+(the named slots of methods/kernels/slots.py: steps done, nfev, njev, the step of the last sample,
+started; under ``sum=compensated`` the carried compensation of y in ``y_io[ROW_CARRY]``), so the
+facade (:mod:`gnibench.suite.cell.drivers`) can call it again and again: it returns
 ``STATUS_PAUSED`` after ``budget`` steps (so that Python can show progress and honour Ctrl-C) and
 ``STATUS_BUFFER_FULL`` when fewer than two output rows are left (a sample and a failure row), and
 continues with exactly the same operations.
 
-The same template is generated three times (literal flags renamed, as ``integrate_dense`` is made
-from methods/kernels/adaptive.py), so that the plain driver compiles without the others' code:
+The step is the method's ``step(y, h, par, ws)``, or under ``sum=compensated`` (``COMPENSATED``,
+a constant of the generated module) ``step_sum(y, e, h, par, ws)``, which adds the increment with
+the carried rounding error e ([HLW] VIII.5; methods/summation.py). The time is t_n = n h (the last
+step h_last), a product, not a running sum.
+
+The same template is generated three times (literal flags renamed, as the adaptive variants are
+made from methods/kernels/adaptive.py), so that the plain driver compiles without the others' code:
 
 * ``integrate`` (``SECTION`` = ``GRID`` = False): a sample every ``every`` steps;
 * ``integrate_grid`` (``GRID``): samples on the time grid t_k = k dt_out, k = 0, every, ... <
-  ``n_out``, plus the final point, by partial steps (methods/kernels/events.py, ``grid_sample``);
+  ``n_out``, plus the final point, by partial steps (``grid_rows_fixed``, methods/kernels/sampling.py);
 * ``integrate_section`` (``SECTION``, problems with a Poincaré section): after each accepted step a
   crossing of g in (t_n, t_n+1] is located by Hénon's trick from y_n and written with the
-  counters of its step; the run stops with ``STATUS_OK`` after ``st[ST_WANTED]`` crossings.
+  counters of its step (``section_rows``); the run stops with ``STATUS_OK`` after
+  ``st[ST_WANTED]`` crossings.
 
-``dt_out`` and ``n_out`` are read by ``integrate_grid`` only; the slots of ``st`` are listed in
-methods/kernels/slots.py.
+``dt_out`` and ``n_out`` are read by ``integrate_grid`` only.
 """
 from __future__ import annotations
 
 from gnibench.methods.kernels.free import (
+    COMPENSATED,
     GRID,
-    GRID_ULPS,
+    ROW_CARRY,
+    ROW_Y,
     SECTION,
     ST_FOUND,
     ST_KOUT,
+    ST_LAST_ROW,
+    ST_NFEV,
+    ST_NJEV,
     ST_ROLLBACKS,
+    ST_STARTED,
+    ST_STEPS,
     ST_TCOMP,
     ST_WANTED,
     STATUS_BUFFER_FULL,
@@ -42,16 +55,17 @@ from gnibench.methods.kernels.free import (
     STATUS_OK,
     STATUS_PAUSED,
     N,
+    carry_zero,
     crosses,
-    grid_sample_fixed,
-    henon_crossing,
+    grid_rows,
     invariants,
     make_ws,
     post_step,
     project,
-    section_event,
     section_g_0,
+    section_rows,
     step,
+    step_sum,
     store,
     to_tuple,
 )
@@ -67,27 +81,32 @@ def record_row(out_t, out_y, out_c, row, t, y, steps, nfev, njev, rejected):
     out_c[row, 3] = rejected
 
 
-def partial_fixed(y, fy, sigma, par, ws, k):
-    """A partial step of a fixed-step method: its own step of size sigma (time grid)."""
+def partial_fixed(y, e, fy, sigma, par, ws, k):
+    """A partial step of a fixed-step method: its own step of size sigma (time grid) from y (+ e)."""
+    if COMPENSATED:
+        y1, _, nf, nj, s = step_sum(y, e, sigma, par, ws)
+        return y1, nf, nj, s
     return step(y, sigma, par, ws)
 
 
 def integrate(y_io, st, par, h, nsteps, h_last, every, dt_out, n_out, budget, out_t, out_y, out_c):
-    # st: steps done, nfev, njev, step of the last sample, started; slots of methods/kernels/slots.py
-    # (GRID: next grid index, time component; SECTION: crossings found and wanted, statistics)
     ws = make_ws()
-    y = to_tuple(y_io[0])
+    y = to_tuple(y_io[ROW_Y])
+    if COMPENSATED:
+        e = to_tuple(y_io[ROW_CARRY])
+    else:
+        e = 0.0                           # no carry: sum=plain
     rows = out_t.shape[0]
     row = 0
-    done = int(st[0])
-    nfev = st[1]
-    njev = st[2]
-    last_row_step = int(st[3])
-    if st[4] == 0.0:
+    done = int(st[ST_STEPS])
+    nfev = st[ST_NFEV]
+    njev = st[ST_NJEV]
+    last_row_step = int(st[ST_LAST_ROW])
+    if st[ST_STARTED] == 0.0:
         if not SECTION:                   # a section run writes crossings only
             record_row(out_t, out_y, out_c, 0, 0.0, y, 0.0, 0.0, 0.0, 0.0)
             row = 1
-        st[4] = 1.0
+        st[ST_STARTED] = 1.0
         if GRID:
             st[ST_KOUT] = every
     kout = int(st[ST_KOUT]) if GRID else 0
@@ -106,7 +125,10 @@ def integrate(y_io, st, par, h, nsteps, h_last, every, dt_out, n_out, budget, ou
         hh = h if done < nsteps - 1 else h_last
         nfev_before = nfev
         njev_before = njev
-        y1, nf, nj, s = step(y, hh, par, ws)
+        if COMPENSATED:
+            y1, e1, nf, nj, s = step_sum(y, e, hh, par, ws)
+        else:
+            y1, nf, nj, s = step(y, hh, par, ws)
         nfev += nf
         njev += nj
         if s != STATUS_OK:
@@ -118,53 +140,40 @@ def integrate(y_io, st, par, h, nsteps, h_last, every, dt_out, n_out, budget, ou
         if probe != 0.0:
             status = STATUS_NONFINITE
             break
-        y1, s = project(y1, par)         # step modifiers (projection), or the identity
+        y1p, s = project(y1, par)        # step modifiers (projection), or the identity
         if s != STATUS_OK:
             status = s
             break
         y_old = y
-        y = post_step(y1, par)           # identification map of the problem, or the identity
+        y = post_step(y1p, par)          # identification map of the problem, or the identity
+        e_old = e
+        if COMPENSATED:                  # a moved point drops the carry (methods/summation.py)
+            e = e1 if y == y1 else carry_zero(e1)
         done += 1
         if SECTION:
             g1 = section_g_0(y, par)
             if crosses(g0, g1):
-                ys, ts, nf = henon_crossing(y_old, (done - 1) * h,
-                                            done * h if done < nsteps else t_final, par, st)
-                nfev += nf
-                row += section_event(ys, ts, par, st, out_t, out_y, out_c, row, done, nfev, njev,
-                                     0.0)
+                t = done * h if done < nsteps else t_final
+                wrote, nfev = section_rows(y_old, e_old, (done - 1) * h, 0.0, g0, y, t, g1, hh,
+                                           par, st, 0, y, out_t, out_y, out_c, row, done, nfev,
+                                           njev, 0.0)
+                row += wrote
                 if st[ST_FOUND] >= st[ST_WANTED]:
                     break
             g0 = g1
         elif GRID:
-            # samples at t_k = k dt_out in this step (methods/kernels/events.py); the step is
-            # redone by the next call when they do not fit the buffer (identical operations)
+            # samples at t_k = k dt_out in this step; the step is redone by the next call when
+            # they do not fit the buffer (identical operations)
             t = done * h if done < nsteps else t_final
-            t_hi = t if tc < 0 else y[tc]
-            tol = GRID_ULPS * 2.220446049250313e-16 * abs(t_hi)
             last = done == nsteps
             row_start = row
             kout_start = kout
-            full = False
-            while kout < n_out:
-                tk = kout * dt_out
-                if not (tk < t_hi - tol or (not last and tk <= t_hi + tol)):
-                    break
-                if row >= rows - 1:
-                    full = True
-                    break
-                yk, sk, nf, nj, s = grid_sample_fixed(y_old, y_old, (done - 1) * h, y, t, hh, tk,
-                                                      tc, par, ws, 0)
-                nfev += nf
-                njev += nj
-                if s != STATUS_OK:
-                    status = s
-                    break
-                record_row(out_t, out_y, out_c, row, sk, yk, done, nfev, njev, 0.0)
-                row += 1
-                kout += every
+            row, kout, nfev, njev, status, full = grid_rows(
+                y_old, e_old, y_old, (done - 1) * h, 0.0, y, t, hh, last, kout, tc, dt_out, n_out,
+                every, par, ws, 0, 0, y, out_t, out_y, out_c, row, done, nfev, njev, 0.0)
             if full:
                 y = y_old
+                e = e_old
                 done -= 1
                 nfev = nfev_before
                 njev = njev_before
@@ -189,11 +198,13 @@ def integrate(y_io, st, par, h, nsteps, h_last, every, dt_out, n_out, budget, ou
         record_row(out_t, out_y, out_c, row, done * h, y, done, nfev, njev, 0.0)
         row += 1
         last_row_step = done
-    store(y, y_io, 0)
-    st[0] = done
-    st[1] = nfev
-    st[2] = njev
-    st[3] = last_row_step
+    store(y, y_io, ROW_Y)
+    if COMPENSATED:
+        store(e, y_io, ROW_CARRY)
+    st[ST_STEPS] = done
+    st[ST_NFEV] = nfev
+    st[ST_NJEV] = njev
+    st[ST_LAST_ROW] = last_row_step
     if GRID:
         st[ST_KOUT] = kout
     return status, row

@@ -206,26 +206,28 @@ def dense_crossing(cf, y0, t0, g0, y1, t1, g1, h, par):
     return u, t0 + theta * h, it
 
 
-def partial_sample(y0, fy0, sigma, par, ws, k):
-    """A partial step of size sigma from y0 (the method's own step, then the step modifiers and the
-    problem's identification map, as for every step): (y, nfev, njev, status)."""
-    y, nf, nj, s = PARTIAL(y0, fy0, sigma, par, ws, k)
+def partial_sample(y0, e0, fy0, sigma, par, ws, k):
+    """A partial step of size sigma from y0 (+ its carried compensation e0 under sum=compensated;
+    the method's own step, then the step modifiers and the problem's identification map, as for
+    every step): (y, nfev, njev, status)."""
+    y, nf, nj, s = PARTIAL(y0, e0, fy0, sigma, par, ws, k)
     if s != STATUS_OK:
         return y, nf, nj, s
     y, s = project(y, par)
     return post_step(y, par), nf, nj, s
 
 
-def grid_sample(y0, fy0, s0, y1, s1, h, tk, tc, par, ws, k):
+def grid_sample(y0, e0, fy0, s0, es0, y1, s1, h, tk, tc, par, ws, k):
     """The sample at grid time tk inside the accepted step (s0, y0) -> (s1, y1) of size h:
     (y, s, nfev, njev, status). tc < 0: the grid's time is the integration variable itself, and s
     is tk; else it is the state component tc (increasing along the step) and s is the integration
-    variable at the sample."""
+    variable at the sample. e0, es0: the carried compensations of y0 and s0 (sum=compensated; 0
+    otherwise), so the partial step of size (tk - s0) - es0 starts from y0 + e0."""
     t1 = s1 if tc < 0 else y1[tc]
     if abs(tk - t1) <= GRID_ULPS * EPS * abs(t1):
         return y1, s1 if tc >= 0 else tk, 0.0, 0.0, STATUS_OK
     if tc < 0:
-        y, nf, nj, s = partial_sample(y0, fy0, tk - s0, par, ws, k)
+        y, nf, nj, s = partial_sample(y0, e0, fy0, (tk - s0) - es0, par, ws, k)
         return y, tk, nf, nj, s
     # secant on sigma for component tc, inside the bracket [0, h] where it goes from < tk to >= tk
     lo = 0.0
@@ -243,7 +245,7 @@ def grid_sample(y0, fy0, s0, y1, s1, h, tk, tc, par, ws, k):
     it = 0
     while it < SECANT_MAXIT:
         it += 1
-        y, nf, nj, s = partial_sample(y0, fy0, sigma, par, ws, k)
+        y, nf, nj, s = partial_sample(y0, e0, fy0, sigma, par, ws, k)
         nfev += nf
         njev += nj
         if s != STATUS_OK:

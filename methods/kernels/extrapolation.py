@@ -6,12 +6,14 @@ been added, ``T[0]`` holds the most extrapolated value T_jj and ``T[1]`` the sub
 whose difference is the error estimate (HNW I, §II.9, (9.22)-(9.23)). Columns are numbered from 1
 as in HNW; the arrays are indexed by ``j - 1``.
 
-The adaptive driver follows ODEX's ODXCOR with its default constants (HNW I, §II.9 "Order and step
-size control"): convergence monitor in line k-1, hope for convergence in line k+1, order and step
-chosen by the work per unit step W_j = A_j / H_j. It is resumable like methods/kernels/adaptive.py:
-its state lives in ``y_io`` (y, f(y)) and ``st`` (t, h, k, reject, nacc, nrej, nfev, started,
-last_row_step). The per-step arrays (T, H_j, W_j) are rebuilt within each step, so nothing else
-has to survive between calls.
+The adaptive mode runs the resumable loop every adaptive method shares (methods/kernels/adaptive.py)
+with odex's attempt and controller below, after ODEX's ODXCOR with its default constants (HNW I,
+§II.9 "Order and step size control"): convergence monitor in line k-1, hope for convergence in
+line k+1, order and step chosen by the work per unit step W_j = A_j / H_j. The controller's state
+is the order k (slot ``ST_CONTROL``); the per-step arrays (T, H_j, W_j: ``adaptive_ws``) are
+rebuilt within each step, so nothing else has to survive between calls. Under
+``sum=compensated`` the extrapolated increment T_kk - y is added to y with the carried rounding
+error (methods/summation.py).
 """
 from __future__ import annotations
 
@@ -19,30 +21,14 @@ import math
 
 import numpy as np
 from gnibench.methods.kernels.free import (
-    GRID,
-    GRID_ULPS,
-    SECTION,
-    ST_FOUND,
-    ST_KOUT,
-    ST_ROLLBACKS,
-    ST_TCOMP,
-    ST_WANTED,
-    STATUS_BUFFER_FULL,
-    STATUS_MAX_STEPS,
+    ACCEPT,
+    COMPENSATED,
+    REJECT,
     STATUS_OK,
-    STATUS_PAUSED,
-    STATUS_STEP_TOO_SMALL,
+    UNSTABLE,
     N,
-    crosses,
+    carry_add,
     f,
-    grid_sample_adaptive,
-    henon_crossing,
-    post_step,
-    project,
-    record_row,
-    section_event,
-    section_g_0,
-    store,
     to_tuple,
     to_tuple_shift,
 )
@@ -109,24 +95,45 @@ def make_ws():
     return np.empty((K_FIXED, N))
 
 
-def step(y, h, par, ws):
-    """Fixed step of order 2 K_FIXED: T_KK of the harmonic sequence (HNW Theorem II.9.1)."""
+def fixed_increment(y, h, par, ws):
+    """T_KK - y of the harmonic sequence with K_FIXED lines (in ws[0]) and the f-evaluations."""
     fy = f(y, par)
     nfev = 1.0
     for j in range(1, K_FIXED + 1):
         nfev += gragg_column(y, fy, h, NJ[j - 1], par, ws, j - 1, False, 0.0, 0.0)
         neville(ws, j)
+    return nfev
+
+
+def step(y, h, par, ws):
+    """Fixed step of order 2 K_FIXED: T_KK of the harmonic sequence (HNW Theorem II.9.1)."""
+    nfev = fixed_increment(y, h, par, ws)
     return to_tuple_shift(y, 1.0, to_tuple(ws[0])), nfev, 0.0, STATUS_OK
 
 
-def partial_adaptive(y, fy, sigma, par, T, kc):
+def step_sum(y, e, h, par, ws):
+    """``step`` with the increment added to y with the carried error e (sum=compensated)."""
+    nfev = fixed_increment(y, h, par, ws)
+    y1, e1 = carry_add(y, e, to_tuple(ws[0]))
+    return y1, e1, nfev, 0.0, STATUS_OK
+
+
+def solution(y, e, T):
+    """y + T_kk (the increment in T[0]) with its carry: (y1, e1)."""
+    if COMPENSATED:
+        return carry_add(y, e, to_tuple(T[0]))
+    return to_tuple_shift(y, 1.0, to_tuple(T[0])), e
+
+
+def partial_adaptive(y, e, fy, sigma, par, ws, kc):
     """odex's own step of size sigma with the kc lines of the accepted step (T_kc,kc, order 2 kc;
     the tableau T is scratch between steps): a partial step for the time grid."""
+    T = ws[0]
     nfev = 0.0
     for j in range(1, kc + 1):
         nfev += gragg_column(y, fy, sigma, NJ[j - 1], par, T, j - 1, False, 0.0, 0.0)
         neville(T, j)
-    return to_tuple_shift(y, 1.0, to_tuple(T[0])), nfev, 0.0, STATUS_OK
+    return solution(y, e, T)[0], nfev, 0.0, STATUS_OK
 
 
 def column(j, y, fy, h, hmax, par, T, hh, w, rtol, atol, errold):
@@ -157,238 +164,158 @@ def column(j, y, fy, h, hmax, par, T, hh, w, rtol, atol, errold):
     return err, errold, float(nf), False
 
 
-def integrate_adaptive(y_io, st, par, t_end, h0, hmax, rtol, atol, every, dt_out, n_out, max_steps,
-                       budget, out_t, out_y, out_c):
-    # dt_out, n_out: the dense-output grid of the embedded pairs' driver; odex has no dense output
-    # here (its ``dt_out`` is always 0), the arguments keep one signature for every adaptive driver
-    T = np.empty((KMAX, N))
-    hh = np.zeros(KMAX)
-    w = np.zeros(KMAX)
-    y = to_tuple(y_io[0])
-    rows = out_t.shape[0]
-    row = 0
-    if st[7] == 0.0:
-        fy = f(y, par)
-        st[1], st[6] = first_step(y, fy, par, h0, hmax, rtol, atol)
-        if h0 <= 0.0:
-            st[1] = min(st[1], 0.5 * t_end)
-        st[0] = 0.0
-        st[2] = max(2, min(KMAX - 1, int(-math.log10(rtol + 1.0e-40) * 0.6 + 1.5)))
-        st[3] = 0.0
-        st[7] = 1.0
-        if not SECTION:                    # a section run writes crossings only
-            record_row(out_t, out_y, out_c, 0, 0.0, y, 0.0, st[6], 0.0, 0.0)
-            row = 1
-        if GRID:
-            st[ST_KOUT] = every
-    else:
-        fy = to_tuple(y_io[1])
-    t, h, k = st[0], st[1], int(st[2])
-    reject = st[3] != 0.0
-    nacc, nrej, nfev = int(st[4]), int(st[5]), st[6]
-    kout = int(st[ST_KOUT]) if GRID else 0
-    tc = int(st[ST_TCOMP]) if GRID else -1
-    g0 = section_g_0(y, par) if SECTION else 0.0
-    status = STATUS_OK
-    stop = nacc + nrej + budget              # attempts in this call (STATUS_PAUSED after them)
-    while True:
-        if row >= rows or (GRID and rows - row < 2):
-            status = STATUS_BUFFER_FULL
-            break
-        if nacc + nrej >= max_steps:
-            status = STATUS_MAX_STEPS
-            break
-        if nacc + nrej >= stop:
-            status = STATUS_PAUSED
-            break
-        # the state before this attempt: a gridded step whose samples do not fit is redone
-        h_start, k_start, reject_start, nrej_start, nfev_start = h, k, reject, nrej, nfev
-        h = min(h, hmax)
-        if 0.1 * abs(h) <= abs(t) * 2.220446049250313e-16 or not h > 0.0:
-            status = STATUS_STEP_TOO_SMALL
-            break
-        last = False
-        if t + 1.01 * h - t_end > 0.0:
-            h = t_end - t
-            last = True
-        # one attempt; go: 55 hope for line k+1, 60 accept, 100 reject, 10 ATOV (h * SAFE3)
-        go = 0
-        kc = 0
-        err = 0.0
-        errold = 1.0e10
-        if nacc + nrej == 0 or last:               # first and last step: lines 1..k
-            for j in range(1, k + 1):
-                kc = j
-                err, errold, nf, atov = column(j, y, fy, h, hmax, par, T, hh, w, rtol, atol,
-                                               errold)
-                nfev += nf
-                if atov:
-                    go = 10
-                    break
-                if j > 1 and err <= 1.0:
-                    go = 60
-                    break
-            if go == 0:
+def adaptive_ws():
+    """The per-call scratch: the tableau T, the optimal steps H_j, the work per unit step W_j, and
+    the attempt's parameters and outcome (``controller_prepare``, ``attempt_outcome``): order k,
+    first, last, after a rejection, hmax; lines used kc, f-evaluations, verdict."""
+    return np.empty((KMAX, N)), np.zeros(KMAX), np.zeros(KMAX), np.zeros(8)
+
+
+def controller_init(y, fy, par, h0, hmax, rtol, atol, t_end):
+    """ODEX's first step (h0, else HINIT, then at most t_end / 2) and first order k."""
+    h, nfev = first_step(y, fy, par, h0, hmax, rtol, atol)
+    if h0 <= 0.0:
+        h = min(h, 0.5 * t_end)
+    return h, nfev, max(2, min(KMAX - 1, int(-math.log10(rtol + 1.0e-40) * 0.6 + 1.5)))
+
+
+def controller_state(x):
+    return int(x)
+
+
+def controller_clip(h, hmax):
+    return min(h, hmax)
+
+
+def controller_prepare(ws, k, first, last, reject, hmax):
+    """What the attempt reads: the order k, first or last step, after a rejection, hmax."""
+    info = ws[3]
+    info[0] = k
+    info[1] = 1.0 if first else 0.0
+    info[2] = 1.0 if last else 0.0
+    info[3] = 1.0 if reject else 0.0
+    info[4] = hmax
+
+
+def attempt_outcome(ws, err):
+    """The lines kc of the last attempt, its f-evaluations and verdict."""
+    info = ws[3]
+    return int(info[5]), info[6], int(info[7])
+
+
+def attempt(y, e, fy, h, par, ws, rtol, atol):
+    """One attempt of ODEX with the order k of ``controller_prepare``: (y1, e1, err, fy); its lines
+    kc, f-evaluations and verdict go to ``attempt_outcome``. The first and the last step compute
+    lines 1..k, the others 1..k-1 and then the convergence monitor; then the hope for convergence
+    in line k+1 (ODEX's labels 55, 60, 100)."""
+    T, hh, w, info = ws
+    k = int(info[0])
+    first = info[1] != 0.0
+    last = info[2] != 0.0
+    reject = info[3] != 0.0
+    hmax = info[4]
+    go = 0                     # 55: hope for line k+1, 60 accept, 100 reject, 10 ATOV (unstable)
+    kc = 0
+    err = 0.0
+    errold = 1.0e10
+    nfev = 0.0
+    if first or last:                              # first and last step: lines 1..k
+        for j in range(1, k + 1):
+            kc = j
+            err, errold, nf, atov = column(j, y, fy, h, hmax, par, T, hh, w, rtol, atol, errold)
+            nfev += nf
+            if atov:
+                go = 10
+                break
+            if j > 1 and err <= 1.0:
+                go = 60
+                break
+        if go == 0:
+            go = 55
+    else:                                          # basic step: lines 1..k-1, then monitor
+        kc = k - 1
+        for j in range(1, kc + 1):
+            err, errold, nf, atov = column(j, y, fy, h, hmax, par, T, hh, w, rtol, atol, errold)
+            nfev += nf
+            if atov:
+                go = 10
+                break
+        if go == 0 and not (k == 2 or reject):     # convergence monitor in line k-1
+            if err <= 1.0:
+                go = 60
+            elif err > (NJ[k] * NJ[k - 1] / 4.0) ** 2:
+                go = 100
+        if go == 0:
+            err, errold, nf, atov = column(k, y, fy, h, hmax, par, T, hh, w, rtol, atol, errold)
+            nfev += nf
+            kc = k
+            if atov:
+                go = 10
+            elif err <= 1.0:
+                go = 60
+            else:
                 go = 55
-        else:                                      # basic step: lines 1..k-1, then monitor
-            kc = k - 1
-            for j in range(1, kc + 1):
-                err, errold, nf, atov = column(j, y, fy, h, hmax, par, T, hh, w, rtol, atol,
-                                               errold)
-                nfev += nf
-                if atov:
-                    go = 10
-                    break
-            if go == 0 and not (k == 2 or reject):   # convergence monitor in line k-1
-                if err <= 1.0:
-                    go = 60
-                elif err > (NJ[k] * NJ[k - 1] / 4.0) ** 2:
-                    go = 100
-            if go == 0:
-                err, errold, nf, atov = column(k, y, fy, h, hmax, par, T, hh, w, rtol, atol,
-                                               errold)
-                nfev += nf
-                kc = k
-                if atov:
-                    go = 10
-                elif err <= 1.0:
-                    go = 60
-                else:
-                    go = 55
-        if go == 55:                               # hope for convergence in line k+1
-            if err > (NJ[k] / 2.0) ** 2:
+    if go == 55:                                   # hope for convergence in line k+1
+        if err > (NJ[k] / 2.0) ** 2:
+            go = 100
+        else:
+            kc = k + 1
+            err, errold, nf, atov = column(kc, y, fy, h, hmax, par, T, hh, w, rtol, atol, errold)
+            nfev += nf
+            if atov:
+                go = 10
+            elif err > 1.0:
                 go = 100
             else:
-                kc = k + 1
-                err, errold, nf, atov = column(kc, y, fy, h, hmax, par, T, hh, w, rtol, atol,
-                                               errold)
-                nfev += nf
-                if atov:
-                    go = 10
-                elif err > 1.0:
-                    go = 100
-                else:
-                    go = 60
-        if go == 10:
-            h *= SAFE3
-            reject = True
-            nrej += 1
-            continue
-        if go == 100:
-            k = min(k, kc, KMAX - 1)
-            if k > 2 and w[k - 2] < w[k - 1] * FAC3:
-                k -= 1
-            nrej += 1
-            h = hh[k - 1]
-            reject = True
-            continue
-        # accepted
-        y1, pst = project(to_tuple_shift(y, 1.0, to_tuple(T[0])), par)
-        if pst != STATUS_OK:
-            status = pst
-            break
-        nacc += 1
-        t_old = t
-        h_acc = h
-        t = t_end if last else t + h
-        y_old = y
-        fy_old = fy
-        y = post_step(y1, par)
-        fy = f(y, par)
-        nfev += 1.0
-        if kc == 2:                                # optimal order by work per unit step
-            kopt = min(3, KMAX - 1)
-            if reject:
-                kopt = 2
-        elif kc <= k:
-            kopt = kc
-            if w[kc - 2] < w[kc - 1] * FAC3:
-                kopt = kc - 1
-            if w[kc - 1] < w[kc - 2] * FAC4:
-                kopt = min(kc + 1, KMAX - 1)
-        else:
+                go = 60
+    info[5] = kc
+    info[6] = nfev
+    if go == 60:
+        info[7] = ACCEPT
+        y1, e1 = solution(y, e, T)
+        return y1, e1, err, fy
+    info[7] = UNSTABLE if go == 10 else REJECT
+    return y, e, err, fy
+
+
+def controller_reject(h, k, err, verdict, kc, ws, nacc):
+    """After a rejection: h * SAFE3 on instability, else line min(k, kc) (one lower when it is
+    cheaper per unit step) and its optimal step: (h_new, k, counted)."""
+    if verdict == UNSTABLE:
+        return h * SAFE3, k, True
+    hh, w = ws[1], ws[2]
+    k = min(k, kc, KMAX - 1)
+    if k > 2 and w[k - 2] < w[k - 1] * FAC3:
+        k -= 1
+    return hh[k - 1], k, True
+
+
+def controller_accept(h, k, err, reject, kc, ws, hmax):
+    """ODEX's order and step after an accepted step of size h with kc lines: (h_new, k)."""
+    hh, w = ws[1], ws[2]
+    if kc == 2:                                # optimal order by work per unit step
+        kopt = min(3, KMAX - 1)
+        if reject:
+            kopt = 2
+    elif kc <= k:
+        kopt = kc
+        if w[kc - 2] < w[kc - 1] * FAC3:
             kopt = kc - 1
-            if kc > 3 and w[kc - 3] < w[kc - 2] * FAC3:
-                kopt = kc - 2
-            if w[kc - 1] < w[kopt - 1] * FAC4:
-                kopt = min(kc, KMAX - 1)
-        if reject:                                 # after a rejection: never a larger step
-            k = min(kopt, kc)
-            h = min(h, hh[k - 1])
-            reject = False
-        else:
-            if kopt <= kc:
-                h = hh[kopt - 1]
-            elif kc < k and w[kc - 1] < w[kc - 2] * FAC4:
-                h = hh[kc - 1] * WORK_A[kopt] / WORK_A[kc - 1]
-            else:
-                h = hh[kc - 1] * WORK_A[kopt - 1] / WORK_A[kc - 1]
-            k = kopt
-        if SECTION:
-            g1 = section_g_0(y, par)
-            if crosses(g0, g1):
-                ys, ts, nf = henon_crossing(y_old, t_old, t, par, st)
-                nfev += nf
-                row += section_event(ys, ts, par, st, out_t, out_y, out_c, row, nacc, nfev, 0.0,
-                                     nrej)
-                if st[ST_FOUND] >= st[ST_WANTED]:
-                    break
-            g0 = g1
-        elif GRID:
-            # samples at t_k = k dt_out in this step by partial steps with the kc lines of this
-            # step (methods/kernels/events.py); redone by the next call when they do not fit
-            t_hi = t if tc < 0 else y[tc]
-            tol = GRID_ULPS * 2.220446049250313e-16 * abs(t_hi)
-            row_start = row
-            kout_start = kout
-            full = False
-            tk = kout * dt_out
-            while kout < n_out and (tk < t_hi - tol or (not last and tk <= t_hi + tol)):
-                if row >= rows - 1:
-                    full = True
-                    break
-                yk, sk, nf, _, s = grid_sample_adaptive(y_old, fy_old, t_old, y, t, h_acc,
-                                                        tk, tc, par, T, kc)
-                nfev += nf
-                if s != STATUS_OK:
-                    status = s
-                    break
-                record_row(out_t, out_y, out_c, row, sk, yk, nacc, nfev, 0.0, nrej)
-                row += 1
-                kout += every
-                tk = kout * dt_out
-            if full:                       # redo this step in the next call, with a new buffer
-                y = y_old
-                fy = fy_old
-                t = t_old
-                h, k, reject, nrej, nfev = h_start, k_start, reject_start, nrej_start, nfev_start
-                nacc -= 1
-                kout = kout_start
-                row = row_start
-                st[ST_ROLLBACKS] += 1.0
-                status = STATUS_BUFFER_FULL
-                break
-            if status != STATUS_OK:
-                break
-            if last:
-                record_row(out_t, out_y, out_c, row, t, y, nacc, nfev, 0.0, nrej)
-                row += 1
-                st[8] = nacc
-        elif nacc % every == 0 or last:
-            record_row(out_t, out_y, out_c, row, t, y, nacc, nfev, 0.0, nrej)
-            row += 1
-            st[8] = nacc
-        if last:
-            break
-    if not SECTION and status != STATUS_OK and status != STATUS_BUFFER_FULL \
-            and status != STATUS_PAUSED and nacc > st[8] and row < rows:
-        record_row(out_t, out_y, out_c, row, t, y, nacc, nfev, 0.0, nrej)
-        row += 1
-    store(y, y_io, 0)
-    store(fy, y_io, 1)
-    st[0], st[1], st[2] = t, h, k
-    st[3] = 1.0 if reject else 0.0
-    st[4], st[5], st[6] = nacc, nrej, nfev
-    if GRID:
-        st[ST_KOUT] = kout
-    return status, row
+        if w[kc - 1] < w[kc - 2] * FAC4:
+            kopt = min(kc + 1, KMAX - 1)
+    else:
+        kopt = kc - 1
+        if kc > 3 and w[kc - 3] < w[kc - 2] * FAC3:
+            kopt = kc - 2
+        if w[kc - 1] < w[kopt - 1] * FAC4:
+            kopt = min(kc, KMAX - 1)
+    if reject:                                 # after a rejection: never a larger step
+        k = min(kopt, kc)
+        return min(h, hh[k - 1]), k
+    if kopt <= kc:
+        h = hh[kopt - 1]
+    elif kc < k and w[kc - 1] < w[kc - 2] * FAC4:
+        h = hh[kc - 1] * WORK_A[kopt] / WORK_A[kc - 1]
+    else:
+        h = hh[kc - 1] * WORK_A[kopt - 1] / WORK_A[kc - 1]
+    return h, kopt

@@ -9,13 +9,24 @@ def _unbound(*args):  # pragma: no cover - only reached if a template is called 
     raise RuntimeError("kernel template called outside a generated module")
 
 
-N = S = NI = NE = NEWTON_MAXIT = 0
+N = S = NI = NE = NEWTON_MAXIT = FIXED_POINT = 0
 A = C = D = I_IDX = E_IDX = ()
 EXPLICIT = False
 f = fjac = to_tuple = shifted = store = _unbound
 lu_solve = newton_done = _unbound
-invariants = make_ws = step = post_step = project = record_row = step_err = to_tuple_shift = _unbound
-step_stages = dense_from_stages = dense_eval = dense_slope = _unbound
+invariants = make_ws = step = post_step = project = record_row = to_tuple_shift = _unbound
+dense_from_stages = dense_eval = dense_slope = _unbound
+# compensated summation (methods/summation.py): the ``_sum`` forms of the steps and the carries
+COMPENSATED = False
+step_sum = _unbound
+carry_sum = carry_add = carry_apply = carry_zero = _unbound
+# the adaptive loop's family parts (methods/kernels/adaptive.py, pair.py, extrapolation.py)
+ACCEPT = REJECT = UNSTABLE = 0
+adaptive_ws = attempt = attempt_stages = attempt_outcome = first_step = _unbound
+controller_init = controller_state = controller_clip = controller_prepare = _unbound
+controller_accept = controller_reject = _unbound
+# after an accepted step (methods/kernels/sampling.py), bound per driver family
+grid_rows = section_rows = GRID_SAMPLE = _unbound
 # section functions of the problem (problems/codegen.py), Hénon's locator (methods/events.py), the
 # event helpers (methods/kernels/events.py) and the per-family names they are renamed to
 section_g_0 = section_cond_0 = section_grad_0 = henon_locate = _unbound
@@ -29,9 +40,12 @@ HENON_STAGES = 0.0
 BETA = EXPO = FAC1 = FAC2 = SAFE = DENSE_NFEV = 0.0
 IORD = STAGES_NEW = 0
 FSAL = DENSE_OUTPUT = GRID = GRIDDED = SECTION = SECTION_DENSE = WITH_STAGES = False
-# slots of the resumable state st (methods/kernels/slots.py)
+# slots of the resumable state st and rows of y_io (methods/kernels/slots.py)
+ST_STARTED = ST_STEPS = ST_NFEV = ST_NJEV = ST_REJECTED = ST_LAST_ROW = ST_T = ST_H = 0
+ST_CONTROL = ST_REJECT = ST_T_CARRY = 0
 ST_KOUT = ST_TCOMP = ST_FOUND = ST_WANTED = ST_NEWTON = ST_SUBSTEPS = ST_MAX_G = ST_LOC_NFEV = 0
 ST_ROLLBACKS = ST_WALKS = ST_HENON_FAILED = 0
+ROW_Y = ROW_F = ROW_CARRY = 0
 GRID_ULPS = 0.0
 # the kernel codes of gnibench.suite.foundation.status.Status (emitted by kernel_constants)
 STATUS_OK = STATUS_NONFINITE = STATUS_NEWTON_FAILED = STATUS_MAX_STEPS = STATUS_STEP_TOO_SMALL = 0

@@ -3,11 +3,20 @@
 Stage increments Z_i = Y_i - y solve Z_i = h sum_j a_ij f(y + Z_j); the new point is
 y1 = y + sum_j d_j Z_j with d = b^T A^{-1} (no extra f-evaluation). Newton uses the Jacobian of f
 at the current iterate (full Newton), so it converges quadratically to round-off.
+
+``step_fixed_point`` (method option ``fixed_point = K``) solves the same equations by at most K
+fixed-point iterations Z <- h A F(y + Z), the simplest solver and the one behind [HLW] Fig 2.4's
+implicit Euler (I.2.4): a step whose iteration has not converged after K iterations is accepted
+with its last iterate (not a failure), and counted in ``njev`` (no Jacobian is evaluated by this
+solver, so ``njev`` records where the iteration did not converge). Under ``sum=compensated``
+(``step_sum``) the increment Σ_j d_j Z_j is added to y with the carried rounding error e
+(methods/summation.py).
 """
 from __future__ import annotations
 
 import numpy as np
 from gnibench.methods.kernels.free import (
+    FIXED_POINT,
     NEWTON_MAXIT,
     STATUS_NEWTON_FAILED,
     STATUS_OK,
@@ -15,6 +24,7 @@ from gnibench.methods.kernels.free import (
     D,
     N,
     S,
+    carry_add,
     f,
     fjac,
     lu_solve,
@@ -30,8 +40,9 @@ def make_ws():
             np.empty((N, N)), np.empty(S * N, dtype=np.int64), np.empty(N))
 
 
-def step(y, h, par, ws):
-    Z, F, M, r, J, piv, out = ws
+def stages(y, h, par, ws):
+    """Newton for the stage increments Z (in ws[0]): (nfev, njev, status)."""
+    Z, F, M, r, J, piv, _ = ws
     scale = 1.0
     for i in range(N):
         scale = max(scale, abs(y[i]))
@@ -42,7 +53,7 @@ def step(y, h, par, ws):
     prev = np.inf
     for it in range(NEWTON_MAXIT + 1):
         if it == NEWTON_MAXIT:
-            return y, nfev, njev, STATUS_NEWTON_FAILED
+            return nfev, njev, STATUS_NEWTON_FAILED
         for j in range(S):
             Yj = shifted(y, Z, j)
             store(f(Yj, par), F, j)
@@ -64,20 +75,74 @@ def step(y, h, par, ws):
                     acc += A[a][j] * F[j, i]
                 r[a * N + i] = h * acc - Z[a, i]
         if not lu_solve(M, r, S * N, piv):
-            return y, nfev, njev, STATUS_NEWTON_FAILED
+            return nfev, njev, STATUS_NEWTON_FAILED
         dnorm = 0.0
         for a in range(S):
             for i in range(N):
                 Z[a, i] += r[a * N + i]
                 dnorm = max(dnorm, abs(r[a * N + i]))
         if not dnorm < np.inf:
-            return y, nfev, njev, STATUS_NEWTON_FAILED
+            return nfev, njev, STATUS_NEWTON_FAILED
         if newton_done(dnorm, prev, scale):
             break
         prev = dnorm
+    return nfev, njev, STATUS_OK
+
+
+def step(y, h, par, ws):
+    nfev, njev, s = stages(y, h, par, ws)
+    if s != STATUS_OK:
+        return y, nfev, njev, s
+    Z, out = ws[0], ws[6]
     for i in range(N):
         acc = 0.0
         for j in range(S):
             acc += D[j] * Z[j, i]
         out[i] = y[i] + acc
     return to_tuple(out), nfev, njev, STATUS_OK
+
+
+def stages_fixed_point(y, h, par, ws):
+    """At most FIXED_POINT fixed-point iterations for Z (in ws[0]): (nfev, njev, status), njev
+    1.0 when the iteration has not converged (the step is accepted all the same)."""
+    Z, F = ws[0], ws[1]
+    scale = 1.0
+    for i in range(N):
+        scale = max(scale, abs(y[i]))
+        for j in range(S):
+            Z[j, i] = 0.0
+    nfev = 0.0
+    prev = np.inf
+    for it in range(FIXED_POINT):
+        for j in range(S):
+            store(f(shifted(y, Z, j), par), F, j)
+        nfev += S
+        dnorm = 0.0
+        for a in range(S):
+            for i in range(N):
+                acc = 0.0
+                for j in range(S):
+                    acc += A[a][j] * F[j, i]
+                dz = h * acc - Z[a, i]
+                Z[a, i] += dz
+                dnorm = max(dnorm, abs(dz))
+        if not dnorm < np.inf:
+            break
+        if newton_done(dnorm, prev, scale):
+            return nfev, 0.0, STATUS_OK
+        prev = dnorm
+    return nfev, 1.0, STATUS_OK
+
+
+def step_sum(y, e, h, par, ws):
+    nfev, njev, s = stages(y, h, par, ws)
+    if s != STATUS_OK:
+        return y, e, nfev, njev, s
+    Z, out = ws[0], ws[6]
+    for i in range(N):
+        acc = 0.0
+        for j in range(S):
+            acc += D[j] * Z[j, i]
+        out[i] = acc
+    y1, e1 = carry_add(y, e, to_tuple(out))
+    return y1, e1, nfev, njev, STATUS_OK

@@ -75,21 +75,21 @@ def run_driver(call: Callable, buffers: Buffers, fraction: Callable[[], float],
     wall = 0.0
     b = UNLIMITED if budget is None else (budget or FIRST_BUDGET)
     while True:
-        try:
+        try:        # Ctrl-C inside a call, or between calls (progress, budget): keep the rows
             t0 = time.perf_counter()
             code, rows = call(b, *buffers.views())
             dt = time.perf_counter() - t0
             wall += dt
             buffers.advance(int(rows))
+            status = Status.from_code(int(code))
+            if status is Status.BUFFER_FULL:
+                buffers.full()
+            elif status is not Status.PAUSED:
+                return status, wall
+            if progress is not None:
+                progress(fraction())
+            if budget == 0 and status is Status.PAUSED:      # tune the next call to CALL_SECONDS
+                scale = CALL_SECONDS / max(dt, 1e-6)
+                b = int(min(max(b * min(scale, 8.0), b / 4.0, 16), UNLIMITED))
         except KeyboardInterrupt:
             return Status.INTERRUPTED, wall
-        status = Status.from_code(int(code))
-        if status is Status.BUFFER_FULL:
-            buffers.full()
-        elif status is not Status.PAUSED:
-            return status, wall
-        if progress is not None:
-            progress(fraction())
-        if budget == 0 and status is Status.PAUSED:      # tune the next call to CALL_SECONDS
-            scale = CALL_SECONDS / max(dt, 1e-6)
-            b = int(min(max(b * min(scale, 8.0), b / 4.0, 16), UNLIMITED))

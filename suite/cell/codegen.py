@@ -24,6 +24,7 @@ from typing import Any
 
 from gnibench.suite.foundation.cache import (
     cache_dir,
+    discard,
     record_numba_files,
     verify_numba_files,
     warn,
@@ -64,7 +65,7 @@ def field_source(ctx: Context, modifiers, offsets) -> str:
     return "".join(parts)
 
 
-def _header(n: int, newton_maxit: int = 50) -> str:
+def _header(n: int, newton_maxit: int = 50, compensated: bool = False) -> str:
     from gnibench.methods.events import event_constants
     from gnibench.methods.kernels.slots import slot_constants
 
@@ -72,14 +73,16 @@ def _header(n: int, newton_maxit: int = 50) -> str:
             "import math\n\nimport numpy as np\nfrom numba import njit as _njit\n\n\n"
             "def njit(**kw):  # error_model='numpy': x/0 gives inf/nan instead of raising\n"
             "    return _njit(error_model='numpy', **kw)\n\n\n"
-            f"N = {n}\nNEWTON_MAXIT = {int(newton_maxit)}\n" + kernel_constants()
-            + slot_constants() + event_constants())
+            f"N = {n}\nNEWTON_MAXIT = {int(newton_maxit)}\n"
+            f"COMPENSATED = {bool(compensated)}  # the method option sum (methods/summation.py)\n"
+            + kernel_constants() + slot_constants() + event_constants())
 
 
 def module_source(problem, method_cfg) -> tuple[str, dict]:
     """The full text of a cell's module, and the problem metadata."""
     from gnibench.methods.events import grid_functions, section_functions, variant
     from gnibench.methods.kernels import driver, linalg, newton
+    from gnibench.methods.summation import carry_source, compensated
     from gnibench.problems.codegen import problem_code
 
     ptext, meta = problem_code(problem.record)
@@ -93,18 +96,20 @@ def module_source(problem, method_cfg) -> tuple[str, dict]:
     for m in mods:
         offsets.append(off)
         off += m.record.runtime_size(m.values)
-    head = _header(meta["n"], method_cfg.base.values.get("newton_maxit", 50))
+    head = _header(meta["n"], method_cfg.base.values.get("newton_maxit", 50),
+                   compensated(method_cfg.base.values))
     if problem.record.post_step is not None:
         post = template(problem.record.post_step)
     else:
         post = "\n@njit(cache=True)\ndef post_step(y, par):\n    return y\n"
     n = meta["n"]
-    body = [head, ptext, post, tuple_helpers(n), template(linalg.lu_solve),
+    body = [head, ptext, post, tuple_helpers(n), carry_source(n), template(linalg.lu_solve),
             template(newton.newton_done), field_source(ctx, mods, offsets),
             template(driver.record_row), method_cfg.base.record.generate(ctx),
             variant(driver.integrate, "integrate"), template(driver.partial_fixed),
             grid_functions("fixed", "partial_fixed"),
-            variant(driver.integrate, "integrate_grid", "GRID")]
+            variant(driver.integrate, "integrate_grid", "GRID",
+                    rename={"grid_rows": "grid_rows_fixed"})]
     if problem.record.sections:    # the section drivers' helpers, Hénon's trick on the cell's f
         body += [section_functions(n), variant(driver.integrate, "integrate_section", "SECTION")]
     return "\n".join(body), meta
@@ -143,9 +148,9 @@ def _import(text: str, prefix: str):
         if stored != text:           # the file is named by the hash of its text: it was modified
             warn(f"cached kernel module {path.name} is corrupt or was modified (it does not match "
                  f"the text it is named after); discarded and rebuilt")
-            path.unlink()
+            discard(path)
             for f in path.parent.glob(f"__pycache__/{path.stem}.*"):
-                f.unlink(missing_ok=True)
+                discard(f)
     if not path.exists():
         write_atomic(path, text)
     verify_numba_files(path)

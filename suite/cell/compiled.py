@@ -1,10 +1,11 @@
-"""A cell's compiled kernels, loaded and warmed up: what the driver facade calls.
+"""A cell's compiled kernels, loaded: what the driver objects call.
 
-:func:`compile_cell` loads (or generates and compiles) the cell's module and its problem's module
-(:mod:`gnibench.suite.cell.codegen`), builds the run-time parameters ``par`` (the problem's model
-parameters, then each modifier's numbers: H0 and gains, [B] (2.5)-(2.6), (2.10)) and runs one step
-of the driver the cell will use, so that compiling or loading from numba's disk cache is timed
-apart from the integration.
+:func:`compile_cell` loads (or generates) the cell's module and its problem's module
+(:mod:`gnibench.suite.cell.codegen`) and builds the run-time parameters ``par`` (the problem's
+model parameters, then each modifier's numbers: H0 and gains, [B] (2.5)-(2.6), (2.10)). numba
+compiles (or loads from its disk cache) each function on its first call: the driver objects
+(:func:`gnibench.suite.cell.drivers.ready_cell`) warm up the driver a cell will use by one step, so
+that this is timed apart from the integration.
 """
 from __future__ import annotations
 
@@ -13,19 +14,8 @@ from dataclasses import dataclass, field, replace
 from types import ModuleType
 
 import numpy as np
-from gnibench.methods.kernels.slots import ST_WANTED
-from gnibench.methods.kernels.slots import STATE as SLOT_STATE
-from gnibench.suite.cell.calls import COUNTERS
-from gnibench.suite.cell.codegen import load, load_problem, record_compiled
+from gnibench.suite.cell.codegen import load, load_problem
 from gnibench.suite.foundation.params import Bound
-
-#: length of ``st``, the resumable state of every compiled driver (methods/kernels/slots.py); the
-#: plain drivers use its first ADAPTIVE_STATE (adaptive) or FIXED_STATE (fixed step) slots
-STATE = SLOT_STATE
-ADAPTIVE_STATE = 10
-FIXED_STATE = 5
-#: the drivers of the fixed-step family (methods/kernels/driver.py); the others are adaptive
-FIXED_DRIVERS = ("integrate", "integrate_grid", "integrate_section")
 
 
 @dataclass
@@ -86,23 +76,16 @@ def problem_kernel(problem: Bound) -> ProblemKernel:
 _cells: dict[tuple[str, str], CompiledCell] = {}
 
 
-def compile_cell(problem: Bound, method, driver: str | None = None) -> CompiledCell:
-    """Load the cell's kernels, build ``par``, and warm up the driver the cell runs (by default the
-    plain one, :func:`plain_driver`); ``compile_seconds`` is what this call took.
-
-    A cell compiled once in this process is kept (keyed by its canonical specs, which fix its
-    module text and ``par``): a worker that runs many cells of one kernel loads it once."""
-    driver = driver or plain_driver(method)
+def compile_cell(problem: Bound, method) -> CompiledCell:
+    """Load the cell's kernels and build ``par``. A cell loaded once in this process is kept (keyed
+    by its canonical specs, which fix its module text and ``par``): a worker that runs many cells of
+    one kernel loads it once; ``warm`` lists its drivers already run once. ``compile_seconds`` is
+    what this call took."""
     key = (problem.text(), method.text())
     t0 = time.perf_counter()
     if key not in _cells:
         _cells[key] = _compile(problem, method)
-    cell = _cells[key]
-    if driver not in cell.warm:
-        warm_up(cell, driver, problem.record.dim, method)
-        cell.warm.add(driver)
-        record_compiled(cell.kernel, cell.problem_kernel)
-    return replace(cell, compile_seconds=time.perf_counter() - t0)
+    return replace(_cells[key], compile_seconds=time.perf_counter() - t0)
 
 
 def _compile(problem: Bound, method) -> CompiledCell:
@@ -120,28 +103,6 @@ def _compile(problem: Bound, method) -> CompiledCell:
     if pk.integral_names:
         pk.integrals(np.array([y0]))
     return cell
-
-
-def plain_driver(method) -> str:
-    """The driver of a cell sampled every K steps (with the method option dt_out of dopri5/dop853,
-    its dense-output grid driver)."""
-    if not method.base.values.get("adaptive"):
-        return "integrate"
-    return "integrate_dense" if method.base.values.get("dt_out", 0.0) > 0.0 else "integrate_adaptive"
-
-
-def warm_up(cell: CompiledCell, driver: str, dim: int, method) -> None:
-    """One step of the named driver on scratch arrays: loads (or compiles) it and all it calls."""
-    y_io = np.array([cell.y0, np.zeros(dim)], dtype=np.float64)
-    out = (np.empty(3), np.empty((3, dim)), np.zeros((3, COUNTERS)))
-    st = np.zeros(STATE)
-    st[ST_WANTED] = 1.0
-    fn = getattr(cell.kernel, driver)
-    if driver in FIXED_DRIVERS:
-        h = float(method.base.values.get("h", 0.01))
-        fn(y_io, st, cell.par, h, 1, h, 1, 0.5 * h, 1, 1, *out)
-    else:
-        fn(y_io, st, cell.par, 1.0, 1e-3, 1.0, 1e-3, 1e-3, 1, 0.5, 2, 1, 1, *out)
 
 
 def dense_output_refusal(problem: Bound, method) -> str:

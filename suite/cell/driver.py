@@ -14,23 +14,17 @@
   mapped back;
 * the benchmark loop (``gnibench bench``: ``budget=None``, one call of the compiled driver).
 
-The compiled drivers are resumable: the facade calls them until they are done
-(:mod:`gnibench.suite.cell.calls`), with a work budget per call tuned so that one call lasts about
-``CALL_SECONDS`` and a new output buffer whenever one is full.
+The compiled drivers are resumable: the facade runs them through their driver objects
+(:mod:`gnibench.suite.cell.drivers`: one per kind, fixed step and adaptive), which call them until
+they are done (:mod:`gnibench.suite.cell.calls`), with a work budget per call tuned so that one
+call lasts about ``CALL_SECONDS`` and a new output buffer whenever one is full.
 """
 from __future__ import annotations
 
 import numpy as np
-from gnibench.methods.kernels.slots import ST_ROLLBACKS, ST_TCOMP
-from gnibench.suite.cell.calls import COUNTERS, UNLIMITED, Buffers, Progress, run_driver
-from gnibench.suite.cell.compiled import (
-    FIXED_DRIVERS,
-    STATE,
-    CompiledCell,
-    compile_cell,
-    plain_driver,
-    problem_kernel,
-)
+from gnibench.suite.cell.calls import COUNTERS, UNLIMITED, Buffers, Progress
+from gnibench.suite.cell.compiled import problem_kernel
+from gnibench.suite.cell.drivers import AdaptiveDriver, FixedStepDriver, build_trajectory, kind_of
 from gnibench.suite.cell.grid import SampleGrid, grid, grid_step
 from gnibench.suite.cell.sections import integrate_section
 from gnibench.suite.cell.timegrid import check_dt_out, effective_dt_out, engine_method, plan
@@ -58,7 +52,7 @@ class Interrupted(KeyboardInterrupt):
 def integrate(problem: Bound, method, *, steps: int | None = None, t_end: float | None = None,
               every: int = 1, dt_out: float | None = None, section: int | None = None,
               locator: str | None = None, reference=None, progress: Progress | None = None,
-              budget: int | None = 0) -> Trajectory:
+              budget: int | None = 0, reverse: bool = False) -> Trajectory:
     """Integrate one cell; bad input raises UserError, divergence is a status.
 
     Parameters
@@ -86,8 +80,14 @@ def integrate(problem: Bound, method, *, steps: int | None = None, t_end: float 
     budget:
         Steps per call of a compiled driver: 0 tunes it to ``CALL_SECONDS`` a call, None does
         the whole horizon in one call (the benchmark loop).
+    reverse:
+        Integrate backward in time, steps of -h from y0 (fixed-step compiled methods, ``steps``
+        or ``t_end`` > 0 giving the length; samples at t = -k h), e.g. to check that a symmetric
+        method retraces its steps, Φ_{-h} ∘ Φ_h = id ([HLW] (1.7)).
     """
     check_integer(every, "--every")
+    if reverse:
+        _check_reverse(problem, method, dt_out, section)
     dt_out = check_dt_out(dt_out)
     check_budgets(problem, method, steps, t_end, every, section, dt_out)
     external = method.kind != "compiled"      # an engine, or Python code: Method.run
@@ -116,7 +116,8 @@ def integrate(problem: Bound, method, *, steps: int | None = None, t_end: float 
         traj = _transformed(problem, transformed, method, steps, t_end, every, dt_out, progress,
                             budget)
     else:
-        traj = _compiled(problem, method, steps, t_end, every, progress, budget, dt_out)
+        traj = _compiled(problem, method, steps, t_end, every, progress, budget, dt_out,
+                         reverse=reverse)
     if traj.status is Status.INTERRUPTED:
         traj.reason = f"interrupted by the user at t = {traj.t[-1]:.17g}" if len(traj.t) else \
             "interrupted by the user"
@@ -164,93 +165,59 @@ def attach_reference(traj: Trajectory, problem: Bound, reference) -> None:
                                               "seconds": sol.seconds})
 
 
+def _check_reverse(problem: Bound, method, dt_out, section) -> None:
+    if (getattr(method.base.record, "run", None) is not None or method.base.values.get("adaptive")
+            or problem.record.transformed(problem.values) is not None):
+        raise UserError(f"reverse=True applies to fixed-step compiled methods; {method.text()} on "
+                        f"{problem.text()} is not one")
+    if dt_out is not None or section is not None:
+        raise UserError("reverse=True samples every K steps; drop --dt-out and --section")
+
+
 def _compiled(problem, method, steps, t_end, every, progress, budget, dt_out=None,
-              tcomp=-1) -> Trajectory:
+              tcomp=-1, reverse=False) -> Trajectory:
     """A compiled cell: the fixed-step driver or the adaptive one, sampled every K steps or on a
     time grid (``tcomp`` >= 0: the grid's time is that state component, :mod:`.timegrid`)."""
-    v = method.base.values
-    adaptive = bool(v.get("adaptive"))
+    kind = kind_of(method)
     h = grid_step(method)
     nsteps, h_last = grid(h, steps, t_end)
-    if adaptive and t_end is None:
+    if kind is AdaptiveDriver and t_end is None:
         raise UserError(f"{method.base.id} with adaptive=true needs --t-end T (not --steps); "
                         f"for fixed steps use {method.base.id}:adaptive=false,h=...")
     dt_out = effective_dt_out(method, dt_out)
-    t_final = float(t_end) if adaptive else (nsteps - 1) * h + h_last
+    t_final = float(t_end) if kind is AdaptiveDriver else (nsteps - 1) * h + h_last
     gp = None if dt_out is None else plan(problem, method, dt_out, t_final, tcomp)
-    name = plain_driver(method) if gp is None else gp.driver
-    cell = compile_cell(problem, method, name)
-    fn = getattr(cell.kernel, name)
-    y_io = np.array([cell.y0, np.zeros(len(cell.y0))], dtype=np.float64)
-    st = np.zeros(STATE)
-    st[ST_TCOMP] = -1.0 if gp is None else gp.tcomp
-    d_out, n_out = (0.0, 0) if gp is None else (gp.dt_out, gp.n_out)
+    name = kind.names["samples"] if gp is None else gp.driver
+    grid_kw = {} if gp is None else {"dt_out": gp.dt_out, "n_out": gp.n_out, "tcomp": gp.tcomp}
+    if kind is AdaptiveDriver:
+        drv = AdaptiveDriver(problem, method, name, t_end, every=every, **grid_kw)
+    else:
+        sign = -1.0 if reverse else 1.0
+        drv = FixedStepDriver(problem, method, name, sign * h, nsteps, sign * h_last, every=every,
+                              **grid_kw)
     if gp is not None:             # the whole grid in one buffer (a step may hold many points)
-        rows = min(-(-min(n_out, GRID_ROWS) // every) + 3 if gp.tcomp < 0 else ADAPTIVE_CHUNK,
+        rows = min(-(-min(gp.n_out, GRID_ROWS) // every) + 3 if gp.tcomp < 0 else ADAPTIVE_CHUNK,
                    GRID_ROWS)
+    elif kind is AdaptiveDriver:
+        rows = ADAPTIVE_CHUNK
     else:
-        rows = ADAPTIVE_CHUNK if adaptive else SampleGrid(h, nsteps, h_last, every).rows + 1
-    buffers = Buffers(rows, problem.record.dim, grow=adaptive or gp is not None)
-    if name in FIXED_DRIVERS:
-        def call(b, out_t, out_y, out_c):
-            return fn(y_io, st, cell.par, h, nsteps, h_last, every, d_out, n_out, b,
-                      out_t, out_y, out_c)
-
-        def fraction():
-            return st[0] / nsteps
-    else:
-        hmax = v["hmax"] if v["hmax"] > 0 else t_end
-
-        def call(b, out_t, out_y, out_c):
-            return fn(y_io, st, cell.par, t_end, v["h0"], hmax, v["rtol"], v["atol"], every,
-                      d_out, n_out, v["max_steps"], b, out_t, out_y, out_c)
-
-        def fraction():
-            return st[0] / t_end
-    status, wall = run_driver(call, buffers, fraction, progress, budget)
-    if adaptive:
-        reason = {Status.MAX_STEPS: f"more than max_steps={v['max_steps']} steps before t = "
-                                    f"{t_end:g}",
-                  Status.STEP_TOO_SMALL: f"step size underflow at t = {st[0]:.17g} (stiff, or "
-                                         f"diverging)",
-                  Status.NEWTON_FAILED: f"the projection did not converge at t = {st[0]:.17g}",
-                  }.get(status, "")
-        meta = {"h": v["h0"], "t_end": t_end, "every": every, "accepted": int(st[4]),
-                "rejected": int(st[5])}
-    else:
-        done = int(st[0])
-        reason = {Status.NONFINITE: f"state overflowed or became NaN at step {done + 1}",
-                  Status.NEWTON_FAILED: f"Newton (or the projection) did not converge at step "
-                                        f"{done + 1}; raise newton_maxit (now "
-                                        f"{v.get('newton_maxit', '-')}) or lower h"}.get(status, "")
-        meta = {"h": h, "nsteps": nsteps, "h_last": h_last, "every": every}
+        rows = SampleGrid(h, nsteps, h_last, every).rows + 1
+    buffers = Buffers(rows, problem.record.dim, grow=kind is AdaptiveDriver or gp is not None)
+    status, wall = drv.run(buffers, progress, budget)
+    meta = drv.meta()
     if gp is not None:
         time_name = "t" if gp.tcomp < 0 else problem.record.state[gp.tcomp]
-        meta["time_grid"] = gp.describe(every, time_name, st[ST_ROLLBACKS])
+        meta["time_grid"] = gp.describe(every, time_name, drv.slot("ST_ROLLBACKS"))
         if gp.locator == "dense output":
-            dense = method.base.record.data.dense
+            pair = method.base.record.data
+            dense = pair.dense
             meta["dense_output"] = {"dt_out": gp.dt_out,
                                     "grid_intervals": meta["time_grid"]["grid_intervals"],
                                     "order": dense.order, "extension": dense.reference,
-                                    "extra_f_per_dense_step": dense.extra_stages}
-    return _trajectory(problem, method, cell, buffers, status, reason, wall, meta)
-
-
-def _trajectory(problem, method, cell: CompiledCell, buffers: Buffers, status, reason, wall,
-                grid_meta) -> Trajectory:
-    t, y, c = buffers.arrays()
-    integrals = np.empty((len(t), len(cell.integral_names)))
-    if len(t) and cell.integral_names:
-        cell.problem_kernel.eval_invariants(y, cell.problem_par, len(t), integrals)
-    return Trajectory(
-        problem=problem.text(), method=method.text(), state_names=problem.record.state, t=t, y=y,
-        steps=c[:, 0].astype(np.int64), nfev=c[:, 1], njev=c[:, 2], rejected=c[:, 3],
-        integral_names=cell.integral_names, integrals=integrals, H0=cell.H0, y0=cell.y0,
-        status=status, reason=reason,
-        provenance={"versions": versions(), **grid_meta, "seed": None, "y0": list(cell.y0),
-                    "H0": list(cell.H0), "wall_seconds": wall,
-                    "compile_seconds": cell.compile_seconds,
-                    "numba_cache_misses": cell.cache_misses})
+                                    "extra_f_per_dense_step": dense.new_stages(pair.tab)}
+    if reverse:
+        meta["reverse"] = True
+    return drv.trajectory(buffers, status, drv.reason(status), meta, wall)
 
 
 def _transformed(problem, transformed, method, steps, t_end, every, dt_out, progress, budget):
@@ -270,31 +237,23 @@ def _transformed(problem, transformed, method, steps, t_end, every, dt_out, prog
     prov = {**inner.provenance, "y0": list(y0), "H0": list(pk.at(y0)),
             "transform": {"option": tr.option, "problem": transformed.text(),
                           "s": inner.t.tolist()[-1:], "doc": tr.doc}}
-    return Trajectory(
-        problem=problem.text(), method=method.text(), state_names=problem.record.state,
-        t=np.ascontiguousarray(t), y=np.ascontiguousarray(y), steps=inner.steps, nfev=inner.nfev,
-        njev=inner.njev, rejected=inner.rejected, integral_names=pk.integral_names,
-        integrals=pk.integrals(y), H0=pk.at(y0), y0=y0, status=inner.status, reason=inner.reason,
-        provenance=prov)
+    counters = np.column_stack([inner.steps, inner.nfev, inner.njev, inner.rejected])
+    return build_trajectory(problem, method, t, y, counters, inner.status, inner.reason, prov)
 
 
 def _external(problem: Bound, method, sg: SampleGrid) -> Trajectory:
     """An external engine's cell: ``Method.run`` on the sample grid instead of a compiled driver."""
-    rec = problem.record
-    y0 = tuple(rec.y0(problem.values))
+    y0 = tuple(problem.record.y0(problem.values))
     pk = problem_kernel(problem)
     run = method.base.record.run(problem, method.base.values, sg, pk)
     t = sg.t[:len(run.y)]
-    status = Status(run.status)
-    return Trajectory(
-        problem=problem.text(), method=method.text(), state_names=rec.state, t=t, y=run.y,
-        steps=run.steps, nfev=np.asarray(run.nfev, dtype=float),
-        njev=np.zeros(len(t)) if run.njev is None else np.asarray(run.njev, dtype=float),
-        rejected=np.zeros(len(t)), integral_names=pk.integral_names, integrals=pk.integrals(run.y),
-        H0=pk.at(y0), y0=y0, status=status, reason=run.reason,
-        provenance={"versions": versions(), "h": sg.h, "nsteps": sg.nsteps, "h_last": sg.h_last,
-                    "every": sg.every, "seed": None, "y0": list(y0), "H0": list(pk.at(y0)),
-                    "grid_param": method.base.record.grid_param, "engine": run.info,
-                    "wall_seconds": run.seconds, "compile_seconds": run.setup_seconds,
-                    "numba_cache_misses": 0})
-
+    counters = np.column_stack([np.asarray(run.steps, dtype=np.float64),
+                                np.asarray(run.nfev, dtype=np.float64),
+                                np.zeros(len(t)), np.zeros(len(t))]) if len(t) else np.zeros((0, 4))
+    prov = {"versions": versions(), "h": sg.h, "nsteps": sg.nsteps, "h_last": sg.h_last,
+            "every": sg.every, "seed": None, "y0": list(y0), "H0": list(pk.at(y0)),
+            "grid_param": method.base.record.grid_param, "engine": run.info,
+            "wall_seconds": run.seconds, "compile_seconds": run.setup_seconds,
+            "numba_cache_misses": 0}
+    return build_trajectory(problem, method, t, run.y, counters, Status(run.status), run.reason,
+                            prov)

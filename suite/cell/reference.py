@@ -149,8 +149,12 @@ def _full_from_text(text: np.ndarray, precision: str) -> np.ndarray:
     return np.array(flat).reshape(text.shape)
 
 
-def _read(path, spec: ReferenceSpec, t: np.ndarray) -> ReferenceSolution | None:
-    """A cached reference whose checksum matches and whose grid is ``t``, or None (rebuild)."""
+_verified: set[tuple[str, str]] = set()
+
+
+def _read(path, spec: ReferenceSpec, t: np.ndarray, problem_bound=None) -> ReferenceSolution | None:
+    """A cached reference whose checksum matches, whose grid is ``t`` and whose content passes
+    the checks of :mod:`.reference_checks` (with ``problem_bound``), or None (rebuild)."""
     import io
 
     raw = read_checked(path, "reference solution")
@@ -160,14 +164,25 @@ def _read(path, spec: ReferenceSpec, t: np.ndarray) -> ReferenceSolution | None:
         with np.load(io.BytesIO(raw), allow_pickle=False) as z:
             if not np.array_equal(z["t"], t):
                 raise ValueError("another grid")
-            y = z["y"]
+            y = np.asarray(z["y"], dtype=np.float64)
             full = _full_from_text(z["y_full"], spec.precision) if "y_full" in z.files else None
             info = json.loads(str(z["info"]))
-    except (ValueError, KeyError, OSError):
+    except Exception:  # noqa: BLE001 - not an npz, or not ours: rebuilt, whatever it is
         warn(f"cached reference solution {path.name} does not hold what its name says; "
              f"discarded and rebuilt")
         discard(path)
         return None
+    seen = (str(path), hashlib.sha256(raw).hexdigest())
+    if problem_bound is not None and seen not in _verified:
+        from gnibench.suite.cell.reference_checks import problem_ok
+
+        why = problem_ok(problem_bound, t, y, full)
+        if why:
+            warn(f"cached reference solution {path.name} is not a solution of "
+                 f"{problem_bound.id}: {why}; discarded and rebuilt")
+            discard(path)
+            return None
+        _verified.add(seen)             # this process checked these very bytes already
     return ReferenceSolution(spec, t, y, full, cached=True, info=info)
 
 
@@ -206,7 +221,7 @@ def reference_solution(problem_bound, t_grid, backend: str | ReferenceSpec = "ex
     if t.ndim != 1 or len(t) == 0 or t[0] < 0 or np.any(np.diff(t) <= 0):
         raise UserError("a reference grid must be a non-empty, increasing array of times >= 0")
     path = cache_path(problem_bound, t, spec)
-    sol = _read(path, spec, t)
+    sol = _read(path, spec, t, problem_bound)
     if sol is not None:
         sol.seconds = time.perf_counter() - t0
         return sol

@@ -64,24 +64,9 @@ from __future__ import annotations
 
 import numpy as np
 from gnibench.methods.events import HENON_MAX_SUBSTEPS, HENON_RTOL
-from gnibench.methods.kernels.slots import (
-    ST_FOUND,
-    ST_HENON_FAILED,
-    ST_LOC_NFEV,
-    ST_MAX_G,
-    ST_NEWTON,
-    ST_SUBSTEPS,
-    ST_WALKS,
-    ST_WANTED,
-)
-from gnibench.suite.cell.calls import Buffers, run_driver
-from gnibench.suite.cell.compiled import (
-    FIXED_DRIVERS,
-    STATE,
-    compile_cell,
-    dense_output_refusal,
-    problem_kernel,
-)
+from gnibench.suite.cell.calls import Buffers
+from gnibench.suite.cell.compiled import dense_output_refusal, problem_kernel
+from gnibench.suite.cell.drivers import AdaptiveDriver, FixedStepDriver, build_trajectory, kind_of
 from gnibench.suite.cell.grid import grid, grid_step
 from gnibench.suite.cell.trajectory import Trajectory
 from gnibench.suite.foundation.errors import UserError
@@ -135,59 +120,38 @@ def integrate_section(problem, method, crossings: int, steps: int | None = None,
         raise UserError(f"dense output does not locate these crossings: {why}")
     if locator == "henon" and not why:
         why = "Hénon's trick asked for (locator='henon')"
-    adaptive = bool(method.base.values.get("adaptive"))
-    if adaptive and t_end is None:
+    kind = kind_of(method)
+    if kind is AdaptiveDriver and t_end is None:
         raise UserError(f"{method.base.id} with adaptive=true needs --t-end T (not --steps)")
-    name = ("adaptive_section" + ("" if why else "_dense")) if adaptive else "integrate_section"
-    cell = compile_cell(problem, method, name)
-    fn = getattr(cell.kernel, name)
-    v = method.base.values
+    name = kind.names["section" if why else "section_dense"]
     h = grid_step(method)
     nsteps, h_last = grid(h, steps, t_end)
-    y_io = np.array([cell.y0, np.zeros(rec.dim)], dtype=np.float64)
-    st = np.zeros(STATE)
-    st[ST_WANTED] = crossings
-    buffers = Buffers(min(CHUNK, crossings + 1), rec.dim, grow=True)
-    if name in FIXED_DRIVERS:
-        def call(b, out_t, out_y, out_c):
-            return fn(y_io, st, cell.par, h, nsteps, h_last, 1, 0.0, 0, b, out_t, out_y, out_c)
-
-        def t_now():
-            done = int(st[0])
-            return done * h if done < nsteps else (nsteps - 1) * h + h_last
-        t_stop = (nsteps - 1) * h + h_last
+    if kind is AdaptiveDriver:
+        drv = AdaptiveDriver(problem, method, name, t_end, wanted=crossings)
     else:
-        hmax = v["hmax"] if v["hmax"] > 0 else t_end
-
-        def call(b, out_t, out_y, out_c):
-            return fn(y_io, st, cell.par, t_end, v["h0"], hmax, v["rtol"], v["atol"], 1, 0.0, 0,
-                      v["max_steps"], b, out_t, out_y, out_c)
-
-        def t_now():
-            return float(st[0])
-        t_stop = float(t_end)
-
-    def fraction():
-        return max(st[ST_FOUND] / crossings, t_now() / t_stop)
-
-    status, wall = run_driver(call, buffers, fraction, progress, budget)
+        drv = FixedStepDriver(problem, method, name, h, nsteps, h_last, wanted=crossings)
+    buffers = Buffers(min(CHUNK, crossings + 1), rec.dim, grow=True)
+    status, wall = drv.run(buffers, progress, budget)
     t, y, c = buffers.arrays()
-    meta = {"wall_seconds": wall, "compile_seconds": cell.compile_seconds, "h": h,
-            "nsteps": nsteps, "t_last_sample": t_now(), "locator": "henon" if why else "dense",
-            "max_abs_g": float(st[ST_MAX_G]), "driver": name}
+    meta = {"wall_seconds": wall, "compile_seconds": drv.cell.compile_seconds, "h": h,
+            "nsteps": nsteps, "t_last_sample": drv.t,
+            "locator": "henon" if why else "dense", "max_abs_g": drv.slot("ST_MAX_G"),
+            "driver": name}
     if why:
         meta["locator_note"] = f"no dense output: {why}"
         field = ("modified: " + "+".join(m.record.id for m in method.modifiers)
                  if method.modifiers else "base")
-        meta["henon"] = _henon_meta(int(st[ST_SUBSTEPS]), f"field integrated by the method ({field})",
-                                    float(st[ST_LOC_NFEV]))
-        meta["henon"].update(time_walks=int(st[ST_WALKS]), not_located=int(st[ST_HENON_FAILED]))
+        meta["henon"] = _henon_meta(int(drv.slot("ST_SUBSTEPS")),
+                                    f"field integrated by the method ({field})",
+                                    drv.slot("ST_LOC_NFEV"))
+        meta["henon"].update(time_walks=int(drv.slot("ST_WALKS")),
+                             not_located=int(drv.slot("ST_HENON_FAILED")))
     else:
         ext = method.base.record.data.dense
         meta["dense"] = {"extension": ext.reference, "order": ext.order,
                          "root": "Newton on g(u(theta)) inside the sign bracket",
-                         "max_iterations": int(st[ST_NEWTON]),
-                         "nfev": float(st[ST_LOC_NFEV])}
+                         "max_iterations": int(drv.slot("ST_NEWTON")),
+                         "nfev": drv.slot("ST_LOC_NFEV")}
     return _trajectory(problem, method, sec, crossings, t, y, c, status, meta)
 
 
@@ -256,9 +220,5 @@ def _trajectory(problem, method, sec, crossings, t, y, c, status, meta) -> Traje
             "section_coords": list(sec.coords), "crossings_requested": crossings,
             "crossings_found": rows, **meta, "y0": list(y0), "H0": list(pk.at(y0)),
             "design": "suite/cell/sections.py"}
-    return Trajectory(
-        problem=problem.text(), method=method.text(), state_names=rec.state,
-        t=np.asarray(t, dtype=float), y=y, steps=c[:, 0].astype(np.int64), nfev=c[:, 1],
-        njev=c[:, 2], rejected=c[:, 3], integral_names=pk.integral_names,
-        integrals=pk.integrals(y), H0=pk.at(y0), y0=tuple(y0), status=status, reason=reason,
-        kind="section", chart=chart, provenance=meta)
+    return build_trajectory(problem, method, t, y, c, status, reason, meta, kind="section",
+                            chart=chart)

@@ -6,11 +6,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
 from pathlib import Path
 
+from gnibench.suite.foundation.budgets import check_limits
 from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.numbers import option, parse_float
+from gnibench.suite.foundation.outputs import check_output_dir, check_output_file, fault
 
 
 class _Once(argparse.Action):
@@ -46,17 +48,7 @@ def _path(text: str) -> Path:
     return Path(text)
 
 
-def check_output_file(path: Path) -> None:
-    """Refuse, before any work, an output file that cannot be written."""
-    if path.is_dir():
-        raise UserError(f"bad -o {path}: it is a directory; allowed: a file name")
-    parent = path.parent
-    if not parent.exists():
-        raise UserError(f"bad -o {path}: directory {parent} does not exist")
-    if not parent.is_dir():
-        raise UserError(f"bad -o {path}: {parent} is not a directory")
-    if not os.access(parent, os.W_OK) or (path.exists() and not os.access(path, os.W_OK)):
-        raise UserError(f"bad -o {path}: not writable")
+JOBS = option("int", "-j", low=1, high=1024)
 
 
 def _load_option(parser) -> None:
@@ -82,10 +74,13 @@ def _parser() -> argparse.ArgumentParser:
     s.add_argument("problem", help="PROBLEM spec, e.g. kepler-2d:e=0.6")
     s.add_argument("method", help="METHOD spec, e.g. rk4:h=0.01+observer:theta=10")
     g = s.add_mutually_exclusive_group(required=True)
-    g.add_argument("--steps", type=int, help="number of steps N")
-    g.add_argument("--t-end", type=float, help="final time T (last step shortened to land on T)")
-    s.add_argument("--every", type=int, default=1, help="sample every K steps (plus the final point)")
-    s.add_argument("--dt-out", type=float, metavar="D",
+    g.add_argument("--steps", type=option("int", "--steps"), help="number of steps N")
+    g.add_argument("--t-end", type=option("float", "--t-end", low=0.0, low_open=True),
+                   help="final time T (last step shortened to land on T)")
+    s.add_argument("--every", type=option("int", "--every"), default=1,
+                   help="sample every K steps (plus the final point)")
+    s.add_argument("--dt-out", type=option("float", "--dt-out", low=0.0, low_open=True),
+                   metavar="D",
                    help="sample at t = k*D (every K-th point with --every K) plus the final point, "
                         "located exactly for every compiled method: dense output (dopri5, dop853) "
                         "or a partial step of the method from the last step; the steps are those "
@@ -99,7 +94,7 @@ def _parser() -> argparse.ArgumentParser:
     s.add_argument("--metrics", metavar="M,...",
                    help="metrics beside the defaults (err_<I>, global_error), e.g. "
                         "eta,precession,growth:of=H (see `gnibench list metrics`)")
-    s.add_argument("--section", type=int, metavar="K",
+    s.add_argument("--section", type=option("int", "--section"), metavar="K",
                    help="integrate until K crossings of the problem's Poincaré section (within "
                         "--t-end / --steps) and write the section points (suite/cell/sections.py)")
     _load_option(s)
@@ -113,7 +108,7 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("experiment", help="path to a TOML file, or the name of a shipped experiment")
     r.add_argument("-o", "--output", type=_path, default=None,
                    help="output directory (default: results/<experiment name>)")
-    r.add_argument("-j", "--jobs", type=int, default=None, metavar="N",
+    r.add_argument("-j", "--jobs", type=JOBS, default=None, metavar="N",
                    help="worker processes (default: the number of cores; 1: serial, in this "
                         "process)")
     r.add_argument("--executor", default="local", metavar="local|dask",
@@ -129,7 +124,7 @@ def _parser() -> argparse.ArgumentParser:
 
     from gnibench.suite.cli.reproduce import add_parser
 
-    add_parser(sub, _path)
+    add_parser(sub, _path, JOBS)
 
     v = sub.add_parser("verify", help="check the claims of [B] and [HLW] against our measurements")
     v.add_argument("claims", nargs="*", metavar="ID", help="claim ids (default: all)")
@@ -140,11 +135,14 @@ def _parser() -> argparse.ArgumentParser:
     v.add_argument("-o", "--output", type=_path, default=None,
                    help="output directory (default: results/seeds, shared with gnibench reproduce: "
                         "cells run by either are reused by the other)")
-    v.add_argument("-j", "--jobs", type=int, default=None, metavar="N")
+    v.add_argument("-j", "--jobs", type=JOBS, default=None, metavar="N")
     v.add_argument("--executor", default="local", metavar="local|dask")
     v.add_argument("--scheduler", metavar="ADDRESS")
     v.add_argument("--no-report", action="store_true",
                    help="do not write the report site (DIR/report/index.html)")
+    v.add_argument("--mutants", nargs="?", const="all", default=None, metavar="ID,...",
+                   help="mutation testing: run the ledger and the catalog's tests on copies of the "
+                        "package with each mutant (or those named) applied; writes DIR/mutants.json")
     r.add_argument("--no-report", action="store_true",
                    help="do not write the report (DIR/report/index.html); summary.md is written")
 
@@ -160,7 +158,8 @@ def _parser() -> argparse.ArgumentParser:
                          "exists)")
 
     b = sub.add_parser("bench", help="time kernels in ns/step against a C loop")
-    b.add_argument("--steps", type=int, default=2_000_000)
+    b.add_argument("--steps", type=option("int", "--steps"), default=2_000_000,
+                   help="steps per timed run (default 2000000; within GNIBENCH_MAX_STEPS)")
     b.add_argument("--no-c", action="store_true", help="skip the gcc -O3 reference loop")
     b.add_argument("--storage", type=_path, default=Path(".benchmarks"), metavar="DIR",
                    help="benchmark history, pytest-benchmark's layout DIR/<machine>/NNNN_<commit>"
@@ -169,7 +168,9 @@ def _parser() -> argparse.ArgumentParser:
     b.add_argument("--compare", action="store_true",
                    help="compare the medians with the last saved run of this machine; exit 1 "
                         "when one is more than --threshold times slower")
-    b.add_argument("--threshold", type=float, default=1.3, metavar="X",
+    b.add_argument("--threshold", type=option("float", "--threshold", low=1.0, low_open=True,
+                                              allowed="a finite number > 1 (e.g. 1.3)"),
+                   default=1.3, metavar="X",
                    help="slowdown that fails --compare (default 1.3: 30%% slower)")
     return p
 
@@ -183,6 +184,7 @@ def _solve(a) -> int:
         raise UserError("--format parquet needs -o FILE (binary output is not written to stdout)")
     if a.output is not None:
         check_output_file(a.output)
+    check_limits()
     cell = solve_cell_spec(a.problem, a.method, steps=a.steps, t_end=a.t_end, every=a.every,
                            dt_out=a.dt_out, section=a.section, reference=a.reference,
                            metrics=() if a.metrics is None else a.metrics)
@@ -191,7 +193,11 @@ def _solve(a) -> int:
         out = solve_output(cell, progress=progress)
     finally:
         progress.close()
-    write_frame(out.frame, out.meta, a.format, a.output, sys.stdout)
+    try:
+        write_frame(out.frame, out.meta, a.format, a.output, sys.stdout)
+    except OSError as e:                  # e.g. the disk filled up: nothing is left half-written
+        raise fault(e, f"writing {a.output or 'stdout'}", "run the same command again once "
+                    "there is room") from None
     if out.interrupted is not None:       # the samples so far are written, then exit 130
         raise out.interrupted
     for name, why in out.skipped.items():
@@ -215,17 +221,19 @@ def _list(a) -> int:
 
 
 def _run(a) -> int:
+    from gnibench.reports.drawing import Drawers
     from gnibench.reports.markdown import render_summary
     from gnibench.suite.runs.runner import run_experiment
 
-    out = run_experiment(a.experiment, a.output, jobs=a.jobs, executor=a.executor,
-                         scheduler=a.scheduler, fresh=a.fresh, summarize=render_summary,
-                         scale=a.scale)
-    if not a.no_report:
-        from gnibench.reports.site import build_site
+    with Drawers() as drawers:      # the report's drawing process imports matplotlib meanwhile
+        out = run_experiment(a.experiment, a.output, jobs=a.jobs, executor=a.executor,
+                             scheduler=a.scheduler, fresh=a.fresh, summarize=render_summary,
+                             scale=a.scale, started=None if a.no_report else drawers.start)
+        if not a.no_report:
+            from gnibench.reports.site import build_site
 
-        index = build_site([out], out / "report")
-        print(f"gnibench: report: {index}", file=sys.stderr)
+            index = build_site([out], out / "report", drawers=drawers)
+            print(f"gnibench: report: {index}", file=sys.stderr)
     return 0
 
 
@@ -234,14 +242,9 @@ def _accuracies(text: str | None) -> tuple[float, ...]:
 
     if text is None:
         return DEFAULT_THRESHOLDS
-    try:
-        values = tuple(float(v) for v in text.split(","))
-    except ValueError:
-        values = ()
-    if not values or not all(0 < v < float("inf") for v in values):
-        raise UserError(f"bad --accuracy {text!r}; allowed: numbers > 0 separated by commas, "
-                        "e.g. 1e-4,1e-8")
-    return values
+    allowed = "finite numbers > 0 separated by commas, e.g. 1e-4,1e-8"
+    return tuple(parse_float(v, "--accuracy", low=0.0, low_open=True, allowed=allowed)
+                 for v in text.split(","))
 
 
 def _report(a) -> int:
@@ -249,6 +252,7 @@ def _report(a) -> int:
 
     thresholds = _accuracies(a.accuracy)
     site = a.output or (Path(a.dirs[0]) / "report" if len(a.dirs) == 1 else Path("report"))
+    check_output_dir(site, "-o" if a.output else "report directory")
     bench = a.benchmarks
     if bench is None and Path(".benchmarks").is_dir():
         bench = Path(".benchmarks")
@@ -260,36 +264,75 @@ def _report(a) -> int:
 
 
 def _bench(a) -> int:
+    from gnibench.suite.foundation.budgets import check_count
     from gnibench.suite.runs.bench import bench
     from gnibench.suite.runs.benchsave import save_and_compare
 
-    if not a.threshold > 1.0:
-        raise UserError(f"bad --threshold {a.threshold}; allowed: a number > 1 (e.g. 1.3)")
+    check_limits()
+    check_count(a.steps, "gnibench bench --steps", "GNIBENCH_MAX_STEPS", "steps")
+    if not a.no_save:                     # refused now, not after the timed runs
+        from gnibench.suite.foundation.benchmarks import machine_id
+
+        check_output_dir(a.storage, "--storage")
+        check_output_dir(a.storage / machine_id(), "--storage")
+    elif a.compare and a.storage.exists() and not a.storage.is_dir():
+        raise UserError(f"bad --storage {a.storage}: it exists and is not a directory")
     rows = bench(steps=a.steps, with_c=not a.no_c)
     return save_and_compare(rows, a.storage, save=not a.no_save, against=a.compare,
                             threshold=a.threshold)
 
 
 def main(argv=None) -> int:
+    """The command line; returns the exit code: 0, 1 (a verdict or comparison that failed, or a
+    fault during work such as a full disk), 2 (bad input), 130/143 (SIGINT/SIGTERM)."""
+    from gnibench.suite.cli import signals, streams
+
+    with signals.handling(), streams.tolerant():
+        return _main(argv)
+
+
+def _main(argv) -> int:
+    from gnibench.suite.cli import signals
+    from gnibench.suite.foundation.outputs import Fault
+
     try:
         a = _parser().parse_args(argv)
         from gnibench.suite.cli.reproduce import run as _reproduce
 
         commands = {"solve": _solve, "list": _list, "run": _run, "reproduce": _reproduce,
                     "bench": _bench, "report": _report}
+        if a.command in ("solve", "run", "reproduce", "verify", "bench"):
+            from gnibench.suite.foundation.cache import check_cache_root
+
+            check_limits()
+            check_cache_root()
         if a.command in ("solve", "list", "run"):
             _definitions(a)
         if a.command == "verify":
             from gnibench.suite.cli.verify import verify_command
 
             return verify_command(a)
-        return commands[a.command](a)
+        code = commands[a.command](a)
+        sys.stdout.flush()                 # a failing stdout (ENOSPC) is reported here, once
+        return code
     except UserError as e:
-        print(f"gnibench: error: {e}", file=sys.stderr)
+        print(f"gnibench: error: {_one_line(e)}", file=sys.stderr)
         return 2
+    except Fault as e:
+        print(f"gnibench: error: {_one_line(e)}", file=sys.stderr)
+        return 1
+    except OSError as e:                   # a fault of the environment no check could foresee
+        where = f" ({e.filename})" if getattr(e, "filename", None) else ""
+        print(f"gnibench: error: {e.strerror or type(e).__name__}{where}", file=sys.stderr)
+        return 1
     except KeyboardInterrupt:
-        print("gnibench: interrupted", file=sys.stderr)
-        return 130
+        signals.quiet()
+        print(f"gnibench: {signals.message()}", file=sys.stderr)
+        return signals.exit_code()
+
+
+def _one_line(e: Exception) -> str:
+    return " ".join(str(e).split("\n"))
 
 
 if __name__ == "__main__":

@@ -14,7 +14,7 @@ from pathlib import Path
 from gnibench.suite.foundation.errors import UserError
 
 
-def add_parser(sub, path_type) -> None:
+def add_parser(sub, path_type, jobs_type) -> None:
     r = sub.add_parser("reproduce", help="run and draw figures and tables of the seeds")
     r.add_argument("ids", nargs="*", metavar="ID",
                    help="figure ids (gnibench reproduce --list), or all")
@@ -22,7 +22,7 @@ def add_parser(sub, path_type) -> None:
                    help="paper: the seed's horizons and step sizes (default); quick: shortened")
     r.add_argument("-o", "--output", type=path_type, default=None, metavar="DIR",
                    help="results directory (default: results/seeds, shared with gnibench verify)")
-    r.add_argument("-j", "--jobs", type=int, default=None, metavar="N",
+    r.add_argument("-j", "--jobs", type=jobs_type, default=None, metavar="N",
                    help="worker processes (default: the number of cores; 1: in this process)")
     r.add_argument("--executor", default="local", metavar="local|dask",
                    help="local: a process pool (default); dask: a Dask cluster")
@@ -97,10 +97,9 @@ def draw_all(dirs: list[Path], figures: list[dict] | None = None, log=None,
     figures = figures or [None] * len(dirs)
     jobs = min(jobs or os.cpu_count() or 1, len(dirs))
     if jobs > 1:
-        import multiprocessing
-        from concurrent.futures import ProcessPoolExecutor
+        from gnibench.suite.foundation.processes import pool as process_pool
 
-        with ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("spawn")) as pool:
+        with process_pool(jobs) as pool:       # Ctrl-C stops the workers at once
             results = list(pool.map(_draw, dirs, figures))
     else:
         results = [_draw(d, f) for d, f in zip(dirs, figures)]

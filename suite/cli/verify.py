@@ -27,12 +27,11 @@ def verify_command(a) -> int:
         raise UserError(f"bad --scale {a.scale!r}; allowed: {', '.join(SCALES)}")
     if a.format not in ("text", "json"):
         raise UserError(f"bad --format {a.format!r}; allowed: text, json")
+    if getattr(a, "mutants", None):
+        return mutants_command(a)
     claims = select_claims(a.claims)
     if a.list:
-        for c in claims:
-            print(f"{c.id:<24} {c.kind}  {c.how:<14} {c.experiment or c.check or '-':<22} "
-                  f"expected {c.expected}  {c.citation}")
-        return 0
+        return _list(claims, a)
     from gnibench.suite.runs import executors
 
     executors.check(a.executor, a.jobs, a.scheduler)
@@ -42,6 +41,26 @@ def verify_command(a) -> int:
     experiments = _load(needed_experiments(claims, a.scale), a.scale)
     dirs = _run(experiments, out, a)
     return _judge(claims, dirs, out, a)
+
+
+def _list(claims, a) -> int:
+    """``--list``: the claims, as text or JSON; the options of a run do not apply."""
+    given = [name for name, value in (("-o", a.output), ("-j", a.jobs), ("--scheduler", a.scheduler))
+             if value is not None]
+    given += ["--executor"] if a.executor != "local" else []
+    given += ["--no-report"] if a.no_report else []
+    if given:
+        raise UserError(f"{', '.join(given)} {'does' if len(given) == 1 else 'do'} not apply "
+                        f"with --list (nothing is run or written); allowed with --list: claim ids, --format")
+    if a.format == "json":
+        print(json.dumps([{"id": c.id, "kind": c.kind, "how": c.how,
+                           "what": c.experiment or c.check, "expected": c.expected,
+                           "citation": c.citation} for c in claims], indent=1))
+        return 0
+    for c in claims:
+        print(f"{c.id:<24} {c.kind}  {c.how:<14} {c.experiment or c.check or '-':<22} "
+              f"expected {c.expected}  {c.citation}")
+    return 0
 
 
 def _load(names: list[str], scale: str) -> list:
@@ -64,7 +83,7 @@ def _judge(claims, dirs, out: Path, a) -> int:
     from gnibench.reports.ledger import render_ledger
     from gnibench.suite.foundation.cache import atomic_write
     from gnibench.suite.foundation.provenance import versions
-    from gnibench.suite.ledger.verdicts import Results
+    from gnibench.suite.ledger.verdicts import VERDICT_ORDER, Results
     from gnibench.suite.ledger.verify import judge, ledger_table, write_ledger
 
     verdicts = judge(claims, Results(dirs), a.scale)
@@ -75,13 +94,15 @@ def _judge(claims, dirs, out: Path, a) -> int:
     atomic_write(out / "ledger.md", lambda p: Path(p).write_text(text, encoding="utf-8"))
     if a.format == "json":
         rows = [{"id": v.id, "citation": v.citation, "verdict": v.verdict,
-                 "expected": v.expected, "measured": _jsonable(v.measured),
-                 "seed_value": v.seed_value, "threshold": v.threshold, "figure": v.figure,
-                 "detail": v.detail} for v in verdicts]
+                 "expected": v.expected, "outcome": v.outcome, "unexpected": v.unexpected,
+                 "measured": _jsonable(v.measured), "seed_value": v.seed_value,
+                 "threshold": v.threshold, "figure": v.figure, "detail": v.detail,
+                 "not_measured": v.not_measured, "runs": [r.describe() for r in v.runs]}
+                for v in verdicts]
         print(json.dumps(rows, indent=1))
     else:
         for v in verdicts:
-            flag = "  UNEXPECTED" if v.unexpected else ""
+            flag = f"  UNEXPECTED (expected {v.expected})" if v.unexpected else ""
             measured = v.row()["measured_text"]
             print(f"{v.id:<24} {v.verdict:<15} measured {measured or '-':<14} seed: "
                   f"{v.seed_value or '-'}{'  [' + v.figure + ']' if v.figure else ''}{flag}")
@@ -91,13 +112,50 @@ def _judge(claims, dirs, out: Path, a) -> int:
         index = build_site([out], out / "report")
         print(f"gnibench: verify: report {index}", file=sys.stderr)
     unexpected = [v.id for v in verdicts if v.unexpected]
-    counts = {k: sum(v.verdict == k for v in verdicts) for k in
-              ("reproduced", "partly", "not reproduced", "not checkable")}
+    counts = {k: sum(v.verdict == k for v in verdicts) for k in VERDICT_ORDER}
     print(f"gnibench: verify: {len(verdicts)} claims: "
           + ", ".join(f"{n} {k}" for k, n in counts.items())
-          + f"; {len(unexpected)} differ from the expected verdict; ledger in {out}",
+          + f"; {len(unexpected)} differ from the expected verdict or failed to measure "
+          f"(the expected verdicts are a regression record, not evidence); ledger in {out}",
           file=sys.stderr)
     return 1 if unexpected else 0
+
+
+def mutants_command(a) -> int:
+    """``gnibench verify [ID...] --mutants [M1,M2,...]``: mutation testing of the ledger
+    (:mod:`gnibench.suite.ledger.mutants`): the baseline and each mutant on a copy of the package;
+    prints which claims or tests killed each mutant, writes ``DIR/mutants.json`` (default DIR:
+    results/seeds, beside the ledger, so that its report page shows the score), exit 0 when every
+    mutant was killed, 1 when some survived."""
+    from gnibench.suite.ledger import mutants
+    from gnibench.suite.ledger.verify import select_claims
+
+    if a.scale not in SCALES:
+        raise UserError(f"bad --scale {a.scale!r}; allowed: {', '.join(SCALES)}")
+    catalog, _ = mutants.load_catalog()
+    known = {m.id: m for m in catalog}
+    if a.mutants == "all":
+        chosen = catalog
+    else:
+        from gnibench.suite.foundation.errors import unknown
+
+        names = [x.strip() for x in a.mutants.split(",") if x.strip()]
+        for n in names:
+            if n not in known:
+                raise unknown("mutant", n, known)
+        chosen = [known[n] for n in names]
+    claims = [c.id for c in select_claims(a.claims)] if a.claims and a.claims != ["all"] else []
+    from gnibench.suite.runs.reproduce import DEFAULT_DIR
+
+    out = a.output if a.output is not None else DEFAULT_DIR
+    doc = mutants.run_mutants(chosen, out, scale=a.scale, jobs=a.jobs or 2, claims=claims or None,
+                              log=lambda s: print(s, file=sys.stderr))
+    for m in doc["mutants"]:
+        by = ", ".join(m["claims"] + m["tests"]) or m["crash"]
+        print(f"{m['id']:<34} {'killed by ' + by if m['killed'] else 'SURVIVED'}")
+    print(f"gnibench: verify: mutation score {doc['killed']}/{doc['total']} at the {doc['scale']} "
+          f"scale; {out / 'mutants.json'}", file=sys.stderr)
+    return 0 if doc["killed"] == doc["total"] else 1
 
 
 def _jsonable(x):

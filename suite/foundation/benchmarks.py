@@ -10,6 +10,7 @@ it. The default storage is ``.benchmarks`` in the working directory (git-ignored
 from __future__ import annotations
 
 import json
+import math
 import platform
 import re
 import subprocess
@@ -95,9 +96,13 @@ def last_values(storage: Path, machine: str, stat: str = "median") -> dict[str, 
         except (ValueError, TypeError, OSError):
             continue
         for b in doc["benchmarks"]:
-            value = (b.get("stats") or {}).get(stat)
-            if value is not None:
-                out[str(b.get("fullname") or b.get("name"))] = (float(value), f.name)
+            try:                       # a hand-edited or damaged entry is skipped, not a crash
+                value = float((b.get("stats") or {})[stat])
+                name = str(b.get("fullname") or b["name"])
+            except (AttributeError, KeyError, TypeError, ValueError):
+                continue
+            if math.isfinite(value):
+                out[name] = (value, f.name)
     return out
 
 

@@ -21,25 +21,27 @@ import math
 import os
 
 from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.numbers import INT_LIMIT, parse_int
 
-INT_LIMIT = 2 ** 62
+__all__ = ["INT_LIMIT", "check_count", "check_integer", "check_limits", "check_output", "limit"]
 
 _DEFAULTS = {"GNIBENCH_MAX_STEPS": 10 ** 10, "GNIBENCH_MAX_ROWS": 10 ** 7,
              "GNIBENCH_MAX_OUTPUT_MB": 2048, "GNIBENCH_MAX_CELLS": 10 ** 5}
 
 
 def limit(name: str) -> int:
-    """The budget ``name`` (an environment variable, or its default)."""
+    """The budget ``name`` (an environment variable, or its default): a whole number from 1 to
+    2^62 in ASCII digits (``1e14`` is fine; ``inf``, ``1_0``, ``١٠`` are refused)."""
     text = os.environ.get(name)
     if text is None or not text.strip():
         return _DEFAULTS[name]
-    try:
-        value = int(float(text))
-    except ValueError:
-        raise UserError(f"bad {name}={text!r}; allowed: a positive number") from None
-    if value < 1:
-        raise UserError(f"bad {name}={text!r}; allowed: a positive number")
-    return value
+    return parse_int(text, f"{name}=", allowed="a whole number from 1 to 2^62, e.g. 1e12")
+
+
+def check_limits() -> None:
+    """Refuse, before any work, a budget variable that is set but not a number."""
+    for name in _DEFAULTS:
+        limit(name)
 
 
 def check_count(value: float, what: str, budget: str, unit: str) -> None:

@@ -15,13 +15,49 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import shutil
 import sys
 from pathlib import Path
 
 
+def cache_root() -> Path:
+    """The cache directory; a one-line UserError when it cannot be one (``GNIBENCH_CACHE_DIR``
+    names a file, or a place where nothing can be created)."""
+    from gnibench.suite.foundation.errors import UserError
+
+    given = os.environ.get("GNIBENCH_CACHE_DIR")
+    root = Path(given or Path.home() / ".cache" / "gnibench")
+    name = f"GNIBENCH_CACHE_DIR={given}" if given else f"the cache directory {root}"
+    if root.exists() and not root.is_dir():
+        raise UserError(f"bad {name}: it is not a directory; allowed: a directory (or unset: "
+                        f"~/.cache/gnibench)")
+    try:
+        root.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise UserError(f"bad {name}: cannot create it ({e.strerror})") from None
+    return root
+
+
+def check_cache_root() -> None:
+    """Refuse, before any work, a cache directory that cannot be one or cannot be written."""
+    from gnibench.suite.foundation.errors import UserError
+    from gnibench.suite.foundation.outputs import probe
+
+    root = cache_root()
+    try:
+        probe(root, "cache")
+    except UserError:
+        given = os.environ.get("GNIBENCH_CACHE_DIR")
+        name = f"GNIBENCH_CACHE_DIR={given}" if given else f"the cache directory {root}"
+        raise UserError(f"bad {name}: not writable; allowed: a writable directory") from None
+
+
 def cache_dir(sub: str = "") -> Path:
-    root = Path(os.environ.get("GNIBENCH_CACHE_DIR") or Path.home() / ".cache" / "gnibench")
+    root = cache_root()
     d = root / sub if sub else root
+    if sub and (d.is_symlink() or d.exists() and not d.is_dir()):
+        warn(f"cache entry {d} is not a directory; removed")
+        discard(d)
     d.mkdir(parents=True, exist_ok=True)
     return d
 
@@ -31,7 +67,18 @@ def write_atomic(path: Path, text: str) -> None:
     concurrent writers (pytest-xdist, Dask workers) never expose a partial file."""
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     tmp.write_text(text)
-    tmp.replace(path)
+    _replace(tmp, path)
+
+
+def _replace(tmp: Path, path: Path) -> None:
+    """Rename ``tmp`` onto ``path``; a directory in the way (a damaged cache) is removed first."""
+    try:
+        tmp.replace(path)
+    except OSError:
+        if not path.is_dir() or path.is_symlink():
+            raise
+        shutil.rmtree(path, ignore_errors=True)
+        tmp.replace(path)
 
 
 def atomic_write(path: Path, write) -> None:
@@ -40,7 +87,7 @@ def atomic_write(path: Path, write) -> None:
     tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
     try:
         write(tmp)
-        tmp.replace(path)
+        _replace(tmp, path)
     finally:
         if tmp.exists():
             tmp.unlink()
@@ -67,32 +114,46 @@ def write_checked(path: Path, data: bytes | str) -> None:
     atomic_write(_sum_path(path), lambda p: Path(p).write_text(digest(raw) + "\n"))
 
 
-def read_checked(path: Path, what: str) -> bytes | None:
-    """The bytes of a cache entry whose checksum matches, or None when it is absent.
+def read_checked(path: Path, what: str, parse=None):
+    """The bytes of a cache entry whose checksum matches (``parse(bytes)`` of them, if given), or
+    None when it is absent.
 
-    An entry that is unreadable, has no checksum, or whose content does not match its checksum is
-    deleted with one warning line (``what`` names it), and None is returned: the caller rebuilds.
+    An entry that is unreadable (a directory, say), has no checksum, whose content does not match
+    its checksum, or that ``parse`` rejects (any exception: valid bytes can still be the wrong
+    content) is deleted with one warning line (``what`` names it), and None is returned: the
+    caller rebuilds.
     """
     path = Path(path)
-    if not path.exists():
+    if not path.exists() and not path.is_symlink():
         return None
     try:
         raw = path.read_bytes()
         expected = _sum_path(path).read_text().strip()
-    except OSError:
+    except (OSError, UnicodeDecodeError):
         expected, raw = None, b""
     if expected != digest(raw):
         warn(f"cached {what} {path.name} is corrupt or was modified (checksum mismatch); "
              f"discarded and rebuilt")
         discard(path)
         return None
-    return raw
+    if parse is None:
+        return raw
+    try:
+        return parse(raw)
+    except Exception as e:  # noqa: BLE001 - whatever is wrong with it, it is rebuilt
+        warn(f"cached {what} {path.name} does not hold what it should ({type(e).__name__}); "
+             f"discarded and rebuilt")
+        discard(path)
+        return None
 
 
 def discard(path: Path) -> None:
-    path = Path(path)
-    path.unlink(missing_ok=True)
-    _sum_path(path).unlink(missing_ok=True)
+    """Remove a cache entry (a file, or whatever took its place) and its checksum."""
+    for p in (Path(path), _sum_path(Path(path))):
+        if p.is_dir() and not p.is_symlink():
+            shutil.rmtree(p, ignore_errors=True)
+        else:
+            p.unlink(missing_ok=True)
 
 
 # -- numba's cache files of a generated module --------------------------------------------------
@@ -114,24 +175,37 @@ def verify_numba_files(module_path: Path) -> None:
     module's cache files are discarded (one warning line) and numba recompiles. Files the manifest
     does not list (a compilation killed before it was recorded) are removed silently."""
     module_path = Path(module_path)
+    pycache = module_path.parent / "__pycache__"
+    if pycache.is_symlink() or pycache.exists() and not pycache.is_dir():
+        warn(f"cache entry {pycache} is not a directory; removed")
+        discard(pycache)
     files = _numba_files(module_path)
     if not files:
         return
     try:
         listed = json.loads(_manifest(module_path).read_text())
-    except (OSError, ValueError):
+        if not isinstance(listed, dict):
+            raise TypeError("not a manifest")
+    except (OSError, ValueError, TypeError):
         listed = {}
-    bad = [f for f in files if f.name in listed and listed[f.name] != digest(f.read_bytes())]
+    bad = [f for f in files if f.name in listed and listed[f.name] != _file_digest(f)]
     if bad:
         warn(f"compiled kernel {bad[0].name} is corrupt or was modified (checksum mismatch); "
              f"discarded and recompiled")
         for f in files:
-            f.unlink(missing_ok=True)
-        _manifest(module_path).unlink(missing_ok=True)
+            discard(f)
+        discard(_manifest(module_path))
         return
     for f in files:
         if f.name not in listed:
-            f.unlink(missing_ok=True)
+            discard(f)
+
+
+def _file_digest(path: Path) -> str | None:
+    try:
+        return digest(path.read_bytes())
+    except OSError:                       # a directory in place of a file: not what was listed
+        return None
 
 
 def record_numba_files(module_path: Path) -> None:
@@ -142,7 +216,9 @@ def record_numba_files(module_path: Path) -> None:
     files = _numba_files(module_path)
     if not files:
         return
-    listed = {f.name: digest(f.read_bytes()) for f in files}
+    listed = {f.name: _file_digest(f) for f in files}
+    if None in listed.values():           # not files: verify_numba_files removes them next time
+        return
     path = _manifest(module_path)
     try:
         if json.loads(path.read_text()) == listed:

@@ -6,15 +6,15 @@ parser and the error messages are all generated from these records (rebound-styl
 from __future__ import annotations
 
 import math
-import re
 from dataclasses import dataclass
 from typing import Any
 
 from gnibench.suite.foundation.errors import UserError
 
 # numbers in specs are ASCII: float() would also take "０.１" (full-width digits) and "0.0_5"
-_FLOAT = re.compile(r"^[+-]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][+-]?[0-9]+)?$", re.ASCII)
-_INT = re.compile(r"^[+-]?[0-9]+$", re.ASCII)
+from gnibench.suite.foundation.numbers import FLOAT as _FLOAT
+from gnibench.suite.foundation.numbers import INT as _INT
+from gnibench.suite.foundation.numbers import ascii_note
 
 
 @dataclass(frozen=True)
@@ -51,9 +51,7 @@ class Param:
 
     def parse(self, text: str, owner: str) -> Any:
         """Parse and validate one value given as text; raise UserError naming the bad value."""
-        note = ""
-        if self.kind in ("float", "int", "floats") and (not text.isascii() or "_" in text):
-            note = " (numbers are written in ASCII digits, without _)"
+        note = ascii_note(text) if self.kind in ("float", "int", "floats") else ""
         bad = UserError(f"{owner}: bad value {self.name}={text!r}; allowed: {self.range_text()}{note}")
         if self.kind == "bool":
             if text.lower() in ("true", "1", "yes"):

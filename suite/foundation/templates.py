@@ -31,12 +31,16 @@ class Context:
     problem: Any = None        # the problem record, for methods built from its model (generating-function4)
 
 
-def template(func, rename: dict[str, str] | None = None) -> str:
-    """Source of a template function, decorated for numba, with identifiers renamed."""
+def template(func, rename: dict[str, str] | None = None, inline: bool = False) -> str:
+    """Source of a template function, decorated for numba, with identifiers renamed.
+
+    ``inline``: numba inlines the function into its callers at the IR level (``inline='always'``)
+    instead of compiling it on its own: for the small pieces of a driver loop (a controller's
+    update), whose separate compilation would cost more than their code."""
     src = _source(func)
     for old, new in (rename or {}).items():
         src = re.sub(rf"\b{re.escape(old)}\b", new, src)
-    return "\n@njit(cache=True)\n" + src
+    return ("\n@njit(cache=True, inline='always')\n" if inline else "\n@njit(cache=True)\n") + src
 
 
 @functools.cache

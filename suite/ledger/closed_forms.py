@@ -130,8 +130,10 @@ def observer_limit(h: float, theta: float, H0: float) -> tuple[float, float]:
 def euler_observer_limit(cells, samples) -> dict:
     """The last sample's H against R(h, θ) over the attracting grid points; R > H0 everywhere;
     the exponents in h of R − H0 (closed form) and of H_N − H0 (runs) at fixed θ, and their
-    difference (R -> H0 as h -> 0, [B] end of §3)."""
-    worst, above, used, points = 0.0, math.inf, 0, []
+    difference (R -> H0 as h -> 0, [B] end of §3). A grid point whose fixed point does not
+    attract (|f'(R)| ≥ 1) may diverge; ``failed_attracting`` counts the runs that did not end
+    ``ok`` although R attracts (the closed form says they must converge): it must be 0."""
+    worst, above, used, points, failed = 0.0, math.inf, 0, [], 0
     for row in cells.itertuples():
         h, observed = _method(row.method)
         (theta,) = observed.values()
@@ -139,6 +141,9 @@ def euler_observer_limit(cells, samples) -> dict:
         H = (rows["q"].to_numpy() ** 2 + rows["p"].to_numpy() ** 2) / 2
         R, slope = observer_limit(h, theta, H[0])
         above = min(above, (R - H[0]) / H[0])
+        if getattr(row, "status", "ok") != "ok":
+            failed += slope < 1
+            continue
         if slope < 1:
             used += 1
             worst = max(worst, abs(H[-1] - R) / H[0])
@@ -155,7 +160,46 @@ def euler_observer_limit(cells, samples) -> dict:
     closed, runs = exponent(2), exponent(3)
     return {"deviation": worst, "above": above, "attracting": float(used),
             "exponent": closed, "exponent_runs": runs, "exponent_gap": abs(closed - runs),
-            "cells": float(len(cells))}
+            "failed_attracting": float(failed), "cells": float(len(cells))}
+
+
+def euler_observer_improvement(cells, samples) -> dict:
+    """[B] §4.2, Fig 8(b), CLAIMS.md B-4.2-g: the observer on H1 only improves the non-observed
+    H2. The selected cells are plain Euler (``label=Euler h=1e-3``) and Euler + observer on H1;
+    at every sample after the first (same steps in both): ``improved`` = 1 when |err_H2| of the
+    observed run is below plain Euler's everywhere; ``ratio_final`` = their ratio at the end;
+    ``ratio_deviation`` = the largest relative deviation of the runs' ratio from the ratio the
+    recurrence E_k <- E_k((1 + h s_k)² + h²) predicts (closed form, module docstring)."""
+    plain = [r for r in cells.itertuples() if "+observer" not in r.method]
+    observed = [r for r in cells.itertuples() if "+observer" in r.method]
+    if len(plain) != 1 or len(observed) != 1:
+        raise LookupError("select one plain Euler cell and one Euler + observer cell")
+    (p,), (o,) = plain, observed
+    pid = item_id(o.problem)
+    spec = _ENERGIES[pid]
+    names = [k for k in spec if k != "states"]
+    C = np.array([spec[n] for n in names])
+    rp, ro = samples[samples["cell"] == p.cell], samples[samples["cell"] == o.cell]
+    steps = ro["steps"].to_numpy(dtype=int)
+    if not np.array_equal(steps, rp["steps"].to_numpy(dtype=int)):
+        raise LookupError("the two runs are not sampled at the same steps")
+    e_p, e_o = np.abs(rp["err_H2"].to_numpy()), np.abs(ro["err_H2"].to_numpy())
+    E0 = np.array([(ro[q].iloc[0] ** 2 + ro[pp].iloc[0] ** 2) / 2 for q, pp in spec["states"]])
+    targets = dict(zip(names, C @ E0))
+    h, obs = _method(o.method)
+    hp, _ = _method(p.method)
+    n = int(steps[-1])
+    H_o = energy_recurrence(pid, E0, h, obs, targets, n)[steps] @ C.T
+    H_p = energy_recurrence(pid, E0, hp, {}, targets, n)[steps] @ C.T
+    k = names.index("H2")
+    with np.errstate(all="ignore"):
+        predicted = np.abs(H_o[:, k] - H_o[0, k]) / np.abs(H_p[:, k] - H_p[0, k])
+        ratio = e_o / e_p
+        later = steps > 0
+        dev = float(np.max(np.abs(ratio[later] / predicted[later] - 1))) if later.any() else math.nan
+    return {"improved": float(bool(later.any() and np.all(e_o[later] < e_p[later]))),
+            "ratio_final": float(ratio[-1]), "ratio_predicted": float(predicted[-1]),
+            "ratio_deviation": dev, "cells": float(len(cells))}
 
 
 def main_lemma_decay(cells, samples) -> dict:
@@ -197,6 +241,7 @@ CLOSED_FORMS = {
     "euler_oscillator_energy": euler_oscillator_energy,
     "euler_observer_limit": euler_observer_limit,
     "main_lemma_decay": main_lemma_decay,
+    "euler_observer_improvement": euler_observer_improvement,
     "gs_section_trace": gs_section_trace,          # [B] §6.2 (closed_forms_b6.py)
     **closed_forms_hlw.CLOSED_FORMS,         # [HLW] Ch. I: returns, cycles, asymmetry, planets
 }

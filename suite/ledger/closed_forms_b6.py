@@ -16,7 +16,26 @@ measure the claims of CLAIMS.md §6 (B-6.2-a … B-6.2-q) on the section samples
   transverse spread near the equilibrium); ``dmax``: the same over all points;
 * ``closest``: min ‖(q2, p2)‖ over the second half of the points; ``decades``: log10(max/min) of
   the closest approaches of the completed passages near the equilibrium (after a far point and
-  before a later one; 0 with fewer than two);
+  before a later one; 0 with fewer than two), shown for comparison only: it follows the drift of
+  H and K (a run whose levels drift passes the equilibrium ever closer or farther), so it does
+  not measure numerical chaos;
+* **numerical chaos** (``irregular``, ``rho_max``, ``rho_median``, ``passages``): the closest
+  approaches after the drift of H and K is removed. Near the saddle the reduced Hamiltonian (6.3)
+  is, to leading order, H − ωI = (P² − r²)/2 + I²/(2r²) with I = K, so on the level
+  E = H − ωK, I = K the smallest distance ‖(q2, p2)‖ = ‖(−P, r)‖ is reached where P = 0:
+  d_min² = √(E² + I²) − E. An orbit moving on its level (the exact flow, or a run whose integrals
+  drift slowly compared with one passage) passes the saddle as r² = d_min² cosh(2λ(t − t0))
+  (λ = √ε = 1, the saddle's real eigenvalue), and the section points sample that passage at
+  most T_c = 2π/ω apart (one rotation), so the closest point of a passage k lies within
+  ρ_k = log10(d_k / d_min(E_k, I_k)) ∈ [0, s], s = ½ log10 cosh(λ T_c) = 0.094 decade, of its
+  own level's minimum, E_k and I_k evaluated at that very point (the drift is thereby removed:
+  whatever the levels, a regular passage stays within s). A passage with ρ_k > s turned away at
+  a distance its level does not allow: the levels changed during the passage — the irregular
+  behaviour [B] calls numerical chaos. ``irregular`` = share of the passages with ρ_k > s;
+  regular: none (0); chaotic: the rule (≥ 1/2, a majority); partly irregular in between
+  (thresholds fixed by this argument, not by the runs; CLAIMS.md B-6.2-b proposed "irregular
+  order" without a number). (The bound assumes the crossings of the section every T_c or more
+  often, true while ω + I/r² ≥ ω, i.e. I ≥ 0 near the passage; we do not correct for I < 0.)
 * ``increases``: steps along the points after the last far point (p2 > 1) where ‖·‖ grows by more
   than 1 % (a monotone approach has none);
 * ``spread_H``, ``spread_K``: max − min of H − H0 and K − K0 over the second half of the points
@@ -37,6 +56,8 @@ import re
 import numpy as np
 
 NEAR, FAR, SMALL = 1e-2, 1.0, 1e-3
+#: the sampling bound of a regular passage: ½ log10 cosh(λ T_c), λ = √ε = 1, T_c = 2π/ω = 1
+SAMPLING_BOUND = 0.5 * math.log10(math.cosh(1.0))
 
 
 def _trace(problem: str, q2: np.ndarray, p2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -67,6 +88,39 @@ def _passages(near: np.ndarray, far: np.ndarray) -> list[tuple[int, int]]:
     return runs
 
 
+def _levels(problem: str, rows, idx: list[int]) -> tuple[np.ndarray, np.ndarray]:
+    """E = H − ωK and I = K at the rows idx, evaluated from the state (accurate near 0)."""
+    from gnibench.problems.codegen import problem_meta, python_functions
+    from gnibench.suite.cell.spec import parse_problem
+
+    bound = parse_problem(problem)
+    fns = python_functions(bound.record)
+    par = bound.record.par(bound.values)
+    names = problem_meta(bound.record)["integrals"]
+    Y = rows[list(bound.record.state)].to_numpy(float)
+    E, I = [], []
+    for k in idx:
+        vals = fns["invariants"](tuple(Y[k]), par)
+        H, K = vals[names.index("H")], vals[names.index("K")]
+        E.append(H - bound.values["omega"] * K)
+        I.append(K)
+    return np.array(E, dtype=float), np.array(I, dtype=float)
+
+
+def chaos_stats(problem: str, rows, r: np.ndarray, runs) -> dict:
+    """``irregular``, ``rho_max``, ``rho_median``, ``passages`` (module docstring)."""
+    if not runs:
+        return {"irregular": 0.0, "rho_max": 0.0, "rho_median": 0.0, "passages": 0.0}
+    idx = [a + int(np.argmin(r[a:b])) for a, b in runs]
+    E, I = _levels(problem, rows, idx)
+    with np.errstate(all="ignore"):
+        dmin = np.sqrt(np.sqrt(E * E + I * I) - E)
+        rho = np.log10(r[idx] / dmin)
+    rho = np.where(np.isfinite(rho), rho, np.inf)     # a level with d_min = 0: turned at d > 0
+    return {"irregular": float(np.mean(rho > SAMPLING_BOUND)), "rho_max": float(np.max(rho)),
+            "rho_median": float(np.median(rho)), "passages": float(len(idx))}
+
+
 def cell_stats(problem: str, rows) -> dict:
     """The statistics of the module docstring for one cell's section samples."""
     q2, p2 = rows["q2"].to_numpy(float), rows["p2"].to_numpy(float)
@@ -93,6 +147,7 @@ def cell_stats(problem: str, rows) -> dict:
     half = slice(n // 2, n)
     k100 = min(99, n - 1)
     return {
+        **chaos_stats(problem, rows, r, runs),
         "points": float(n),
         "neg": float(np.sum((q2 < 0) & ~near)), "pos": float(np.sum((q2 > 0) & ~near)),
         "traversals": float(traversals),

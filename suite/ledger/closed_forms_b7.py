@@ -12,7 +12,12 @@ wants a trajectory, does not apply; the same statistics are computed here on the
   occupied bins, the smallest over all pairs of cells; and the points in Γ1 of each cell.
 * ``so4_plateau`` ([B] §7.2 after Fig 29, "oscillating around a stable non-zero value"): for each
   err_Hi, the least-squares line err = m + s t over [T/2, T], its drift |s|·T/2 relative to |mean|,
-  and |mean| / std (CLAIMS.md B-7.2-f); the worst over i and the cells.
+  |mean| / std (CLAIMS.md B-7.2-f), and ``same_sign``, the share of the samples in [T/2, T] with the
+  sign of the mean: an error oscillating around zero has one sign half of the time, one that
+  oscillates around a non-zero value more often; for a sinusoidal oscillation a + m, the share
+  is ½ + arcsin(m/a)/π, so ``same_sign`` ≥ 3/4 ⇔ the offset m exceeds the oscillation's rms
+  a/√2 (CLAIMS.md's |mean| ≥ 2 std instead demands an error that never changes sign). The worst
+  over i and the cells.
 * ``so4_growth`` ([B] §7.2, "the error ... increases for H1 and H2"): the growth exponent in t of
   the envelope max_{s≤t} |err_Hi(s)|, the least-squares slope of log envelope against log t over
   [T/100, T] on 200 log-spaced times (CLAIMS.md Conventions); the smallest over H1, H2 and cells.
@@ -55,7 +60,7 @@ def _integrals(rows) -> list[str]:
 
 
 def so4_plateau(cells, samples) -> dict:
-    drift, ratio = 0.0, math.inf
+    drift, ratio, sign = 0.0, math.inf, math.inf
     out = {}
     for row in cells.itertuples():
         rows = samples[samples["cell"] == row.cell]
@@ -67,9 +72,11 @@ def so4_plateau(cells, samples) -> dict:
             mean, std = float(np.mean(e)), float(np.std(e))
             d = abs(s) * (t[-1] / 2) / abs(mean) if mean else math.inf
             r = abs(mean) / std if std else math.inf
+            same = float(np.mean(np.sign(e) == np.sign(mean))) if mean else 0.0
             out[f"drift_{name}"], out[f"mean_over_std_{name}"] = d, r
-            drift, ratio = max(drift, d), min(ratio, r)
-    out["drift"], out["mean_over_std"] = drift, ratio
+            out[f"same_sign_{name}"] = same
+            drift, ratio, sign = max(drift, d), min(ratio, r), min(sign, same)
+    out["drift"], out["mean_over_std"], out["same_sign"] = drift, ratio, sign
     return out
 
 

@@ -197,6 +197,75 @@ def solar_system(cells, samples) -> dict:
     return worst
 
 
+def _implicit_euler_gap(rows, values, h: float) -> dict:
+    """Why implicit Euler cannot take the step after the last sample of ``rows`` (a run that ended
+    newton_failed): in relative coordinates r = q_J − q_S its equations read
+    r1 + c r1/|r1|³ = r_pred + h² δ, c = h² G (m0 + m_J), r_pred = r + h (v_J − v_S), δ the pull of
+    the other planets. The left side has the direction of r1 and the length g(|r1|), g(λ) = λ +
+    c/λ², whose minimum over λ > 0 is g_min = (3/2)(2c)^{1/3} (at λ = (2c)^{1/3}); the right side
+    is at most |r_pred| + h²|δ| long. So no r1 — no solution of the implicit Euler equations, for
+    any solver — exists when ``margin`` = g_min − |r_pred| − h² δ_max > 0, with δ_max = G Σ m_k
+    (1/(D_k − 2)² + 1/(D_k − 1)²) over the other planets at heliocentric distances D_k (each
+    body moves far less than 1 AU in a step, and |r1| < g_min < 1 AU)."""
+    q0 = rows[["q0x", "q0y", "q0z"]].to_numpy(dtype=float)[-1]
+    v0 = rows[["p0x", "p0y", "p0z"]].to_numpy(dtype=float)[-1] / values["m0"]
+    qJ = rows[["q1x", "q1y", "q1z"]].to_numpy(dtype=float)[-1]
+    vJ = rows[["p1x", "p1y", "p1z"]].to_numpy(dtype=float)[-1] / values["m1"]
+    G = values["G"]
+    c = h * h * G * (values["m0"] + values["m1"])
+    g_min = 1.5 * (2 * c) ** (1 / 3)
+    r_pred = float(np.linalg.norm(qJ - q0 + h * (vJ - v0)))
+    delta = 0.0
+    for k in range(2, 6):
+        D = float(np.linalg.norm(rows[[f"q{k}x", f"q{k}y", f"q{k}z"]].to_numpy(dtype=float)[-1] - q0))
+        delta += G * values[f"m{k}"] * (1 / (D - 2) ** 2 + 1 / (D - 1) ** 2)
+    return {"r_jupiter": float(np.linalg.norm(qJ - q0)), "r_predicted": r_pred, "g_min": g_min,
+            "margin": g_min - r_pred - h * h * delta, "t_stop": float(rows["t"].iloc[-1])}
+
+
+def implicit_euler_solar_system(cells, samples) -> dict:
+    """[HLW] I.2.4, Fig 2.4, HLW-2.4-b: implicit Euler (h = 10) on the outer solar system. The
+    selected cells are implicit Euler solved by Newton's method and by K fixed-point iterations
+    (method option fixed_point = K, a sweep over K, which the seed does not give). For the
+    Newton cell: whether it ended newton_failed and, at its last point, the ``margin`` of
+    :func:`_implicit_euler_gap` (> 0: the step has no solution at all). For the fixed-point cells
+    (each must run to the end): ``picture`` = share of them in which Jupiter comes within 0.5 AU
+    of the sun before Saturn does and both end ≥ 50 AU away (CLAIMS.md), with each cell's
+    ``jupiter_fall_<K>``, ``saturn_fall_<K>``, ``final_r_<K>``, ``unconverged_<K>`` (steps whose
+    iteration did not converge, njev)."""
+    from gnibench.suite.cell.spec import parse_method, parse_problem
+    from gnibench.suite.ledger.reach import NotMeasured
+
+    out: dict[str, float] = {}
+    good, fixed = 0, 0
+    for row in cells.itertuples():
+        method = parse_method(row.method)
+        if method.id != "implicit-euler" or method.modifiers:
+            raise ValueError(f"select implicit Euler cells, not {row.method}")
+        k = int(method.base.values.get("fixed_point", 0))
+        if k == 0:
+            out["newton_failed"] = float(row.status == "newton_failed")
+            values = dict(parse_problem(row.problem).values)
+            out.update(_implicit_euler_gap(_rows(samples, row.cell), values,
+                                           float(method.base.values["h"])))
+            continue
+        if row.status != "ok":
+            raise NotMeasured(f"the fixed-point cell {row.cell} ({row.method}) ended {row.status} "
+                              f"at t = {row.t_final:.6g}")
+        fixed += 1
+        one = solar_system(cells[cells["cell"] == row.cell], samples)
+        ok = one["jupiter_fall"] < one["saturn_fall"] and one["final_r"] >= 50
+        good += ok
+        for key in ("jupiter_fall", "saturn_fall", "final_r"):
+            out[f"{key}_{k}"] = one[key]
+        out[f"unconverged_{k}"] = float(row.njev)
+    if "newton_failed" not in out or not fixed:
+        raise LookupError("select the Newton cell and at least one fixed-point cell")
+    out["picture"] = good / fixed
+    out["measured"] = out["margin"]
+    return out
+
+
 def angular_momentum_roundoff(cells, samples) -> dict:
     """[HLW] I.2.3, HLW-2.1-b: the error of L = q1 p2 − q2 p1 against two round-off scales, over
     the selected cells (the worst): ``ratio_L`` = max|L_n − L0| / (ε |L0| √n) (CLAIMS.md's
@@ -224,4 +293,5 @@ CLOSED_FORMS = {
     "lv_stages": lv_stages,
     "pendulum_asymmetry": pendulum_asymmetry,
     "solar_system": solar_system,
+    "implicit_euler_solar_system": implicit_euler_solar_system,
 }

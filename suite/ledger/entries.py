@@ -18,7 +18,8 @@ and exactly one way of being checked:
 * **measured on runs**: ``experiment = "b-claims-4.2"`` (a shipped experiment id) and
   ``values.<name> = {cells = "label=Euler h=0.1", column = "max_abs_err_H1"}`` (a column of
   ``cells.parquet``) or ``{cells = ..., sample = "err_H1", at = "steps=55"}`` (a column of
-  ``samples.parquet`` at ``last``, ``steps=N``, ``t=T`` (the last sample with t ≤ T), or reduced
+  ``samples.parquet`` at ``last``, ``steps=N``, ``t=T`` (the sample at T of a run that reached T,
+  to 1e-9 relative; none: not measured), or reduced
   over the samples: ``max_abs``, ``min``, ``max``); several cells need ``reduce = "max"``
   (min, max, mean, all, any). Then ``measured = "<expression>"`` and ``passes =
   "<expression over measured and the values>"``, optionally ``partly = "<expression>"``.
@@ -32,7 +33,22 @@ and exactly one way of being checked:
   computation (no long integration); it returns named values for ``measured``/``passes``.
 * **an aggregate**: ``all_of = ["B-4.2-g", "B-4.2-h"]``: reproduced when all are (a part not in
   the ledger yet is "not checkable": :func:`missing_parts`).
-* **not checkable**: ``not_checkable = "why"`` (a diagram, a photo, a result of another work).
+* **not checkable**: ``not_checkable = "why"`` (a diagram, a photo, a result of another work, a
+  method of another work in whose place we run ours); ``experiment`` with ``side.<name> = {...}``
+  (as ``values``) shows our own numbers beside the verdict, as a side result.
+
+Optional keys of every entry that reads runs: ``accept = ["step_too_small"]`` (also per value):
+failure statuses that are the claimed behaviour itself (a method breaking down), so the failed
+run's values are measured over what it computed; ``reach = "horizon"``: the experiment records
+all section crossings up to its horizon, the point count being a cap (a run that reached its
+horizon is complete); ``needed = "..."``: what would have been needed to reproduce the claim
+(shown on the ledger page). Otherwise a value from a failed or truncated run, or at a time or
+step the run did not reach, is not measured and the claim not reproduced
+(:mod:`gnibench.suite.ledger.reach`). ``expected`` may also be ``not measured``: not reproduced
+because a run it needs does not complete (a regression record, like every ``expected``).
+Cell selectors: ``field=value`` / ``field~value`` terms joined by ``&``, alternatives by ``|``.
+Ids: those of CLAIMS.md, and ``<id>.corrected`` for the corrected relation of a seed's slip (the
+printed statement keeps the inventory id).
 
 The keys, their types, defaults and what each allows are the fields of :class:`Claim` and
 :class:`Value` below (a new key is one line there; the README's table of claim keys is rendered
@@ -52,7 +68,9 @@ from gnibench.suite.foundation.records import Allowed, Line, NonEmptyLine, Recor
 from gnibench.suite.foundation.tomlfile import load_toml
 from pydantic import AfterValidator, Field, PrivateAttr, model_validator
 
-VERDICTS = ("reproduced", "not reproduced", "partly", "not checkable")
+VERDICTS = ("reproduced", "not reproduced", "partly", "not checkable", "not measured")
+#: the failure statuses a claim may accept as its claimed behaviour (suite/foundation/status.py)
+FAILURES = ("nonfinite", "newton_failed", "max_steps", "step_too_small")
 REDUCE = ("min", "max", "mean", "all", "any", "sum")
 _AT = re.compile(r"^(last|max_abs|min|max|[A-Za-z_][A-Za-z0-9_]*=[-+]?(\d+\.?\d*|\.\d+)"
                  r"([eE][-+]?\d{1,3})?)$")
@@ -87,6 +105,9 @@ class Value(Record):
     at: Annotated[Line, AfterValidator(_at)] | None = key(
         None, "which sample: last (default), steps=N, t=T, or reduced: max_abs, min, max")
     reduce: Literal[REDUCE] | None = key(None, "over several cells (default max)")
+    accept: Annotated[list[Literal[FAILURES]], Field(max_length=4)] | None = key(
+        None, "failure statuses that are the claimed behaviour: the failed run is measured over "
+              "what it computed")
 
     @model_validator(mode="after")
     def _one_column(self):
@@ -131,7 +152,17 @@ class Claim(Record):
     all_of: Annotated[list[NonEmptyLine], Field(max_length=200), AfterValidator(tuple)] = key(
         (), "an aggregate: reproduced when all these claims are", "a list of claim ids")
     not_checkable: Text = key("", "why it cannot be checked")
-    scale: Literal["", "paper"] = key("", "paper: not checkable at the quick scale", "paper")
+    scale: Literal["", "paper"] = key("", "paper: skipped at the quick scale", "paper")
+    accept: Annotated[list[Literal[FAILURES]], Field(max_length=4), AfterValidator(tuple)] = key(
+        (), "failure statuses that are the claimed behaviour (all the entry's cells)")
+    reach: Literal["", "horizon"] = key(
+        "", "horizon: a section run that reached its horizon is complete (the count is a cap)")
+    needed: Text = key("", "what would have been needed to reproduce the claim")
+    side: Annotated[dict[Name, Annotated[Value, AfterValidator(_plain)]],
+                    Field(max_length=64)] = key({}, "a not-checkable entry's side result: our "
+                                                    "numbers, read as values are, shown beside it",
+                                                "a table name = {cells, column | sample, at, "
+                                                "reduce}")
     _source: str = PrivateAttr("")
 
     @property

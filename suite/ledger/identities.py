@@ -8,11 +8,12 @@ Each check returns named values for the claim's ``measured``/``passes`` expressi
 from __future__ import annotations
 
 import numpy as np
-from gnibench.suite.ledger import identities_b, identities_b41, identities_hlw
+from gnibench.suite.ledger import identities_b, identities_b41, identities_hlw, identities_slips
 
 
 def _registry() -> dict:
-    return {**identities_b.CHECKS, **identities_b41.CHECKS, **identities_hlw.CHECKS}
+    return {**identities_b.CHECKS, **identities_b41.CHECKS, **identities_hlw.CHECKS,
+            **identities_slips.CHECKS}
 
 
 def names() -> list[str]:

@@ -32,18 +32,19 @@ def observer_term_geometry() -> dict:
     y0 = np.array(cell.y0)
     F0 = np.array(cell.kernel.base_f(tuple(y0), cell.par))
     on = np.linalg.norm(np.array(cell.kernel.f(tuple(y0), cell.par)) - F0) / np.linalg.norm(F0)
-    normal, formula = 0.0, 0.0
+    normal, formula, kappa = 0.0, 0.0, 0.0
     H0 = np.array([cell.H0[i] for i in idx])
     for y in random_states(bound, 20, spread=0.01):
         P = np.array(cell.kernel.f(tuple(y), cell.par)) - np.array(cell.kernel.base_f(tuple(y), cell.par))
         D = np.array([fns[f"grad_{i}"](tuple(y), par) for i in idx])
+        kappa = max(kappa, float(np.linalg.cond(D)))
         H = np.array([fns[f"integral_{i}"](tuple(y), par) for i in idx])
         tangent = P - np.linalg.pinv(D) @ (D @ P)
         normal = max(normal, np.linalg.norm(tangent) / np.linalg.norm(P))
         expected = np.linalg.pinv(D) @ (np.diag([1.0, 3.0]) @ (H0 - H))
         formula = max(formula, np.linalg.norm(P - expected) / np.linalg.norm(expected))
     return {"on_manifold": float(on), "normal": float(normal), "formula": float(formula),
-            "measured": float(max(normal, formula))}
+            "kappa": kappa, "measured": float(max(normal, formula))}
 
 
 def nondiagonal_gain_decay() -> dict:

@@ -14,32 +14,28 @@ from gnibench.suite.ledger.identity_tools import (
 
 def lv_invariant() -> dict:
     """[HLW] (1.4): I = ln u − u + 2 ln v − v is an invariant (∇I·f = 0), and an accurate trajectory
-    (dop853, 1e-12, t = 20) keeps it."""
+    (dop853, 1e-14, t = 20) keeps it."""
     from gnibench.suite.cell.solve import solve
 
-    traj = solve("lotka-volterra", "dop853:rtol=1e-12,atol=1e-12", t_end=20.0)
+    traj = solve("lotka-volterra", "dop853:rtol=1e-14,atol=1e-14", t_end=20.0)
     drift = float(np.max(np.abs(traj.integrals[:, 0] - traj.H0[0])))
     return {"residual": conservation_residual("lotka-volterra"), "trajectory": drift,
             "measured": drift}
 
 
 def _forth_and_back(method: str, h: float, steps: int = 100) -> float:
-    """|Φ_{−h}^n(Φ_h^n(y0)) − y0| / |y0| on the pendulum, by the compiled step itself."""
-    from gnibench.suite.cell.compiled import FIXED_STATE, compile_cell
+    """|Φ_{−h}^n(Φ_h^n(y0)) − y0| / |y0| on the pendulum: n steps forward, then n steps backward
+    from the point reached (the driver facade, ``reverse=True``)."""
+    from gnibench.suite.cell.driver import integrate
     from gnibench.suite.cell.spec import prepare
 
     bound, cfg = prepare("pendulum:p0=0.3,q0=1.0", f"{method}:h={h!r}")
-    cell = compile_cell(bound, cfg)
-
-    def run(y, hh):
-        out = (np.empty(4), np.empty((4, 2)), np.zeros((4, 5)))
-        y_io, st = np.array([y, np.zeros(2)], dtype=float), np.zeros(FIXED_STATE)
-        _, rows = cell.kernel.integrate(y_io, st, cell.par, hh, steps, hh, steps, 0.0, 0, 1 << 40,
-                                        *out)
-        return out[1][rows - 1].copy()
-
-    y0 = np.array(cell.y0)
-    return float(np.linalg.norm(run(run(y0, h), -h) - y0) / np.linalg.norm(y0))
+    y_n = integrate(bound, cfg, steps=steps, every=steps).y[-1]
+    start = ",".join(f"{s}0={float(v)!r}" for s, v in zip(bound.record.state, y_n))
+    back, cfg = prepare(f"pendulum:{start}", f"{method}:h={h!r}")
+    y_back = integrate(back, cfg, steps=steps, every=steps, reverse=True).y[-1]
+    y0 = np.array(bound.record.y0(bound.values))
+    return float(np.linalg.norm(y_back - y0) / np.linalg.norm(y0))
 
 
 def imr_symmetric() -> dict:

@@ -205,7 +205,7 @@ def time_numba_adaptive(method: str, periods: int = ADAPTIVE_PERIODS,
 def pair_header(pair, n: int = 4) -> str:
     """The C header kepler_adaptive.c is compiled with: the pair's controller constants and its
     ``step_err``, unrolled with constant coefficients as methods/embedded_rk.py writes the numba
-    one (same operations, same order: zero coefficients skipped, sums left to right)."""
+    ``attempt`` (same operations, same order: zero coefficients skipped, sums left to right)."""
     tab, s = pair.tab, pair.tab.stages
     if not pair.fsal:
         raise ValueError("kepler_adaptive.c takes FSAL pairs only")

@@ -25,6 +25,7 @@ from collections.abc import Callable, Iterator
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
 from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.processes import quiet_worker, stop_now
 from gnibench.suite.runs.cellwork import CellOutcome, install_reporter, run_cell
 
 EXECUTORS = ("local", "dask")
@@ -58,12 +59,17 @@ def check(executor: str, jobs: int | None, scheduler: str | None) -> None:
         except ImportError:
             raise UserError("--executor dask needs dask[distributed]: pip install "
                             "'gnibench[dask]'") from None
+    if scheduler is not None:      # before the output directory exists: is a scheduler there?
+        from gnibench.suite.runs.scheduler import probe
+
+        probe(scheduler)
 
 
 def run(groups: list[list], executor: str = "local", jobs: int | None = None,
         scheduler: str | None = None, progress: Progress | None = None) -> Iterator[CellOutcome]:
     """Run the cells of ``groups`` and yield their outcomes as they finish."""
-    jobs = jobs or default_jobs()
+    total = sum(len(g) for g in groups)
+    jobs = max(1, min(jobs or default_jobs(), total))     # -j 1000 for 6 cells: 6 processes
     if executor == "dask":
         yield from _dask(groups, jobs, scheduler)
     elif jobs == 1 or sum(len(g) for g in groups) <= 1:
@@ -83,10 +89,11 @@ def _serial(groups, progress) -> Iterator[CellOutcome]:
 _queue = None
 
 
-def _worker_init(q) -> None:
-    """In each worker: Ctrl-C is the parent's business; progress goes through the queue."""
+def _worker_init(q, parent: int) -> None:
+    """In each worker: Ctrl-C is the parent's business (SIGINT ignored, SIGTERM ends the worker),
+    the worker dies with its parent, and progress goes through the queue."""
     global _queue
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    quiet_worker(parent)
     _queue = q
     install_reporter(_report)
 
@@ -113,7 +120,7 @@ def _local(groups, jobs, progress) -> Iterator[CellOutcome]:
     ctx = mp.get_context(method)
     q = ctx.Queue()
     pool = ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_worker_init,
-                               initargs=(q,))
+                               initargs=(q, os.getpid()))
     waiting = {i: list(g[1:]) for i, g in enumerate(groups)}
     running = {pool.submit(run_cell, g[0]): i for i, g in enumerate(groups) if g}
     try:
@@ -132,13 +139,7 @@ def _local(groups, jobs, progress) -> Iterator[CellOutcome]:
 
 def _stop(pool: ProcessPoolExecutor) -> None:
     """Shut the pool down now: cancel what has not started, stop what runs (Ctrl-C)."""
-    processes = list(getattr(pool, "_processes", {}).values())
-    pool.shutdown(wait=False, cancel_futures=True)
-    for p in processes:
-        if p.is_alive():
-            p.terminate()
-    for p in processes:
-        p.join(timeout=5)
+    stop_now(pool)
 
 
 # -- Dask -----------------------------------------------------------------------------------
@@ -148,14 +149,23 @@ def _dask(groups, jobs, scheduler) -> Iterator[CellOutcome]:
 
     cluster = None
     if scheduler is None:
-        cluster = LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True,
-                               dashboard_address=None)
-        client = Client(cluster)
+        # SIGINT blocked while the cluster starts: its threads and worker processes inherit the
+        # mask, so a Ctrl-C at the terminal reaches this process only (which closes the cluster)
+        # instead of printing a traceback from every worker; a Ctrl-C meanwhile waits, not lost
+        blocked = {signal.SIGINT}
+        signal.pthread_sigmask(signal.SIG_BLOCK, blocked)
+        try:
+            cluster = LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True,
+                                   dashboard_address=None)
+            client = Client(cluster)
+        finally:
+            signal.pthread_sigmask(signal.SIG_UNBLOCK, blocked)
     else:
         try:
             client = Client(scheduler, timeout="10s")
-        except (OSError, TimeoutError) as e:
-            raise UserError(f"bad --scheduler {scheduler!r}: cannot connect ({e})") from None
+        except Exception as e:  # noqa: BLE001 - it answered the probe, then went away
+            raise UserError(f"bad --scheduler {scheduler!r}: cannot connect "
+                            f"({type(e).__name__}: {e})") from None
     try:
         waiting = {}                   # pure=False: fresh keys, never a result of another run
         for g in groups:
@@ -166,7 +176,13 @@ def _dask(groups, jobs, scheduler) -> Iterator[CellOutcome]:
             for cell in waiting.pop(fut, []):
                 pending.add(client.submit(run_cell, cell, pure=False))
             yield fut.result()
+    except BaseException:
+        import logging
+
+        # Ctrl-C: the workers are stopped mid-cell; Dask's warnings about that are no news
+        logging.getLogger("distributed").setLevel(logging.ERROR)
+        raise
     finally:
         client.close()
         if cluster is not None:
-            cluster.close()
+            cluster.close(timeout=5)

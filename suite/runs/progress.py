@@ -3,7 +3,7 @@
 :class:`RunProgress` follows a matrix: cells done of all, failures so far, elapsed time, ETA and
 the cells running now with how far each got. :class:`SolveProgress` follows one integration
 (fraction of the horizon, or of the section crossings) and stays silent for the first couple of
-seconds, so short commands print nothing. When stderr is not a terminal, both write plain lines
+seconds of the integration, so short commands print nothing. When stderr is not a terminal, both write plain lines
 (a line per finished cell; a line every ``LINE_SECONDS`` for long work), which logs and CI keep
 readable.
 """
@@ -87,16 +87,22 @@ def _describe(o) -> str:
 
 
 class SolveProgress:
-    """Progress of one integration: call it with the fraction done."""
+    """Progress of one integration: call it with the fraction done.
+
+    The clock starts at the first call (the compiled driver has returned once: the kernel is
+    compiled or loaded and the integration runs), so compiling is not counted as progress; the
+    first plain line comes ``QUIET_SECONDS`` after that, then one every ``LINE_SECONDS``."""
 
     def __init__(self, what: str, stream=None):
         self.stream = sys.stderr if stream is None else stream
         self.what = what
-        self.t0 = self.last_line = time.monotonic()
+        self.t0 = self.last_line = None
         self.bar = None
 
     def __call__(self, fraction: float) -> None:
         now = time.monotonic()
+        if self.t0 is None:
+            self.t0, self.last_line = now, now - LINE_SECONDS
         if now - self.t0 < QUIET_SECONDS:
             return
         if is_terminal(self.stream):

@@ -101,12 +101,10 @@ def listing() -> list[dict]:
 
 
 def check_output(out: Path) -> None:
-    """Refuse, before any work, an output directory that cannot be one."""
-    if out.exists() and not out.is_dir():
-        raise UserError(f"bad -o {out}: it exists and is not a directory")
-    parent = next((p for p in [out, *out.parents] if p.exists()), Path("."))
-    if not parent.is_dir():
-        raise UserError(f"bad -o {out}: {parent} is not a directory")
+    """Refuse, before any work, an output directory that cannot be one (or be written)."""
+    from gnibench.suite.foundation.outputs import check_output_dir
+
+    check_output_dir(out)
 
 
 def run_figures(experiments: list[Experiment], out: Path, *, jobs: int | None = None,

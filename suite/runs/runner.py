@@ -34,12 +34,14 @@ experiment and the executor options are validated first and nothing is written w
 """
 from __future__ import annotations
 
+import contextlib
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
 from gnibench.suite.foundation.cache import atomic_write
+from gnibench.suite.foundation.outputs import fault
 from gnibench.suite.foundation.provenance import versions
 from gnibench.suite.runs import executors
 from gnibench.suite.runs.cellwork import CellOutcome, kernel_group
@@ -52,7 +54,7 @@ FLUSH_RATIO = 10.0
 
 def run_experiment(name_or_path, out_dir=None, *, jobs: int | None = None,
                    executor: str = "local", scheduler: str | None = None, fresh: bool = False,
-                   log=None, summarize=None, scale: str = "paper") -> Path:
+                   log=None, summarize=None, scale: str = "paper", started=None) -> Path:
     """Run an experiment (shipped name or TOML path); return the output directory.
 
     Parameters
@@ -75,9 +77,14 @@ def run_experiment(name_or_path, out_dir=None, *, jobs: int | None = None,
         every consolidation (None: no summary).
     scale:
         ``paper`` (the file's values) or ``quick`` (its ``[scale.quick]`` overrides).
+    started:
+        Called once the experiment and the executor options are valid, before anything is
+        written (the command line starts the report's drawing process there).
     """
     experiment = load_experiment(name_or_path, scale)
     executors.check(executor, jobs, scheduler)
+    if started is not None:
+        started()
     out = Path(out_dir) if out_dir is not None else Path("results") / experiment.name
     run_experiments([experiment], [out], out, jobs=jobs, executor=executor, scheduler=scheduler,
                     fresh=fresh, log=log, summarize=summarize, name=experiment.name)
@@ -108,30 +115,36 @@ def run_experiments(experiments: list[Experiment], outs: list[Path], store_root:
         print(f"gnibench: {name}: {len(unique)} cells -> {where} ({len(done)} reused from the "
               f"store, {len(todo)} to compute)", file=log, flush=True)
         progress = RunProgress(len(unique), len(done), log, name)
+        outcomes = executors.run(_groups(todo), executor, jobs, scheduler, progress.cell_progress)
         try:
-            for outcome in executors.run(_groups(todo), executor, jobs, scheduler,
-                                         progress.cell_progress):
-                key = key_of.get(id(outcome.cell)) or cell_key(outcome.cell)
-                store.write(key, _part(outcome), writers[0].empty_samples)
-                done.add(key)
-                progress.cell_done(outcome)
-                for w in writers:      # only the experiments that hold the cell have news
-                    if key in w.key_set:
-                        w.dirty = True
-                    if w.dirty and w.due():
-                        w.flush(done)
-        except KeyboardInterrupt:
-            progress.close()
+            with contextlib.closing(outcomes):      # an error stops the workers at once
+                for outcome in outcomes:
+                    key = key_of.get(id(outcome.cell)) or cell_key(outcome.cell)
+                    store.write(key, _part(outcome), writers[0].empty_samples)
+                    done.add(key)
+                    progress.cell_done(outcome)
+                    for w in writers:      # only the experiments that hold the cell have news
+                        if key in w.key_set:
+                            w.dirty = True
+                        if w.dirty and w.due():
+                            w.flush(done)
             for w in writers:
                 w.flush(done)
+        except KeyboardInterrupt:
+            progress.close()
+            with contextlib.suppress(OSError):
+                for w in writers:
+                    w.flush(done)
             print(f"gnibench: interrupted: {len(done)} of {len(unique)} cells are stored in "
                   f"{store_root}; run the same command again to compute the rest", file=log,
                   flush=True)
             raise
+        except OSError as e:          # the disk filled up, say: what is stored stays
+            raise fault(e, "the run", f"{len(done)} of {len(unique)} cells are stored in "
+                        f"{store_root}; run the same command again once the cause is "
+                        f"removed") from None
         finally:
             progress.close()
-        for w in writers:
-            w.flush(done)
     return outs
 
 

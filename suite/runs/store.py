@@ -16,26 +16,26 @@ definition, :mod:`gnibench.suite.cell.user`), the source code that computes it
 (problems, methods and their kernels, the cell layer, the metrics and the tables: a fingerprint of
 those files) and the package versions. Running the same experiment again reuses every part whose
 key matches and computes only the missing cells; a cell whose spec or code changed gets a new key
-and is recomputed, never reused stale. Parts are verified when read (a part that cannot be read
-is discarded and recomputed).
+and is recomputed, never reused stale. Parts are verified when read: a part that cannot be read, or
+whose content does not match the checksum it carries (:func:`content_checksum`, in its metadata),
+is discarded with one warning line and recomputed.
 """
 from __future__ import annotations
 
-import fcntl
 import hashlib
 import json
-import os
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Self
 
+from gnibench.suite.foundation.cache import discard, warn
 from gnibench.suite.foundation.errors import UserError
 from gnibench.suite.foundation.provenance import versions
 
 #: what the numbers of a cell depend on (folders and files of the package, relative to its root)
 CODE = ("problems", "methods", "suite/foundation", "suite/cell", "suite/metrics",
         "suite/runs/tables.py")
-PART_FORMAT = 1
+PART_FORMAT = 2             # 2: a checksum of the content in the metadata
 
 
 def package_root() -> Path:
@@ -98,58 +98,51 @@ class Store:
     def __init__(self, out: Path):
         self.out = Path(out)
         self.parts = self.out / "parts"
-        self._lock_file = None
+        self._lock = None
         self._memo: dict[str, Part] = {}      # parts this run has read (each read once)
 
     # -- the lock ---------------------------------------------------------------------------------
 
     def open(self) -> Self:
-        """Create the directory, take the lock (a one-line UserError if another run holds it) and
-        remove the temporary files of killed runs."""
-        if self.out.exists() and not self.out.is_dir():
-            raise UserError(f"bad -o {self.out}: it exists and is not a directory")
+        """Create the directory, take the lock (a one-line UserError if another run holds it; a
+        lock whose owner is gone is taken over, :mod:`gnibench.suite.runs.lock`) and remove the
+        temporary files of killed runs."""
+        from gnibench.suite.runs.lock import DirectoryLock
+
+        self.make_output_dir(self.out)
         try:
-            self.parts.mkdir(parents=True, exist_ok=True)
+            self.parts.mkdir(exist_ok=True)
+        except FileExistsError:                # parts is a file: not ours to keep
+            warn(f"{self.parts} is not a directory; removed")
+            discard(self.parts)
+            self.parts.mkdir()
         except OSError as e:
-            raise UserError(f"bad -o {self.out}: cannot create the directory ({e.strerror})") \
+            raise UserError(f"bad -o {self.out}: cannot create {self.parts} ({e.strerror})") \
                 from None
-        if not os.access(self.out, os.W_OK):
-            raise UserError(f"bad -o {self.out}: the directory is not writable")
-        lock = open(self.out / ".lock", "a+")          # noqa: SIM115 - held until close()
-        try:
-            fcntl.flock(lock.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
-            lock.seek(0)
-            holder = lock.read().strip() or "another process"
-            lock.close()
-            raise UserError(f"results directory {self.out} is in use by another gnibench run "
-                            f"({holder}); wait for it to finish or use another -o") from None
-        lock.seek(0)
-        lock.truncate()
-        lock.write(f"pid {os.getpid()}\n")
-        lock.flush()
-        self._lock_file = lock
+        lock = DirectoryLock(self.out)
+        lock.acquire()
+        self._lock = lock
         self.clean_temporary()
         return self
 
     @staticmethod
     def make_output_dir(out: Path) -> None:
         """Create an output directory (a one-line UserError if it cannot be one)."""
+        from gnibench.suite.foundation.outputs import probe
+
         out = Path(out)
-        if out.exists() and not out.is_dir():
-            raise UserError(f"bad -o {out}: it exists and is not a directory")
         try:
+            if out.exists() and not out.is_dir():
+                raise UserError(f"bad -o {out}: it exists and is not a directory")
             out.mkdir(parents=True, exist_ok=True)
         except OSError as e:
             raise UserError(f"bad -o {out}: cannot create the directory ({e.strerror})") from None
-        if not os.access(out, os.W_OK):
-            raise UserError(f"bad -o {out}: the directory is not writable")
+        probe(out, f"-o {out}")
 
     def close(self) -> None:
-        if self._lock_file is not None:
-            fcntl.flock(self._lock_file.fileno(), fcntl.LOCK_UN)
-            self._lock_file.close()
-            self._lock_file = None
+        if self._lock is not None:
+            self._lock.release()
+            self._lock = None
 
     def __enter__(self) -> Self:
         return self.open()
@@ -176,44 +169,87 @@ class Store:
         return self.path(key).is_file()
 
     def write(self, key: str, part: Part, empty_samples) -> None:
-        """Commit one finished cell atomically."""
+        """Commit one finished cell atomically, with the checksum of its content."""
         from gnibench.suite.runs.storage import write_parquet
 
         samples = part.samples if part.samples is not None else empty_samples
         meta = {"part_format": PART_FORMAT, "key": key, "row": part.row, "timing": part.timing,
                 "state_names": list(part.state_names), "has_samples": part.samples is not None}
+        meta = json.loads(json.dumps(meta, default=str))       # as it will be read back
+        meta["checksum"] = content_checksum(meta, part.samples)
         write_parquet(samples, self.path(key), meta)
 
     def read(self, key: str) -> Part | None:
-        """A stored part, or None when it is missing or cannot be read (then it is discarded).
+        """A stored part, or None when it is missing or damaged (then it is discarded, with one
+        warning line: it cannot be read, or its content does not match its checksum).
 
         A part read before by this run is returned from memory, as a copy (its rows are
         re-stamped with each experiment's cell ids): a run over several experiments, or one that
         consolidates its tables many times, reads each part from the disk once (and the tables
         are built from what the disk holds, whether the part was computed now or before)."""
-        import pandas as pd
-        from gnibench.suite.runs.storage import read_parquet_meta
-
         path = self.path(key)
         if key in self._memo and path.is_file():
             p = self._memo[key]
             return Part(None if p.samples is None else p.samples.copy(deep=False), dict(p.row),
                         dict(p.timing), p.state_names)
-        if not path.is_file():
+        if not path.exists():
             return None
+        part = self._load(key, path)
+        if part is None:
+            return None
+        self._memo[key] = part
+        return Part(None if part.samples is None else part.samples.copy(deep=False),
+                    dict(part.row), dict(part.timing), part.state_names)
+
+    def _load(self, key: str, path: Path) -> Part | None:
+        import pandas as pd
+        from gnibench.suite.runs.storage import read_parquet_meta
+
         try:
             meta = read_parquet_meta(path)
             if meta.get("key") != key or meta.get("part_format") != PART_FORMAT:
-                raise ValueError("not the part of this cell")
+                raise ValueError("it is not the part of this cell")
             samples = pd.read_parquet(path) if meta["has_samples"] else None
-        except Exception:  # noqa: BLE001 - a damaged part is recomputed, whatever the damage
-            path.unlink(missing_ok=True)
+            stored = meta.pop("checksum", None)
+            if stored != content_checksum(meta, samples):
+                warn(f"stored cell {path.relative_to(self.out)} does not match its checksum "
+                     f"(damaged or modified); discarded and recomputed")
+                discard(path)
+                return None
+            return Part(samples, _restore(meta["row"]), _restore(meta["timing"]),
+                        tuple(meta["state_names"]))
+        except Exception as e:  # noqa: BLE001 - a damaged part is recomputed, whatever the damage
+            why = " ".join(str(e).split())[:120] or type(e).__name__
+            warn(f"stored cell {path.relative_to(self.out)} cannot be read ({why}); discarded "
+                 f"and recomputed")
+            discard(path)
             return None
-        part = Part(samples, _restore(meta["row"]), _restore(meta["timing"]),
-                    tuple(meta["state_names"]))
-        self._memo[key] = part
-        return Part(None if samples is None else samples.copy(deep=False), dict(part.row),
-                    dict(part.timing), part.state_names)
+
+
+def content_checksum(meta: dict, samples) -> str:
+    """sha256 of a part's content: its metadata (canonical JSON, without the checksum) and its
+    samples, column by column (name, then the values: numbers as little-endian 8-byte words,
+    anything else as text), so that one flipped bit in a value, a name or a row is seen."""
+    import numpy as np
+    import pandas as pd
+
+    h = hashlib.sha256(json.dumps(meta, sort_keys=True, default=str).encode())
+    if samples is None:
+        return h.hexdigest()
+    h.update(f"rows {len(samples)}\n".encode())
+    for name in samples.columns:
+        column = samples[name]
+        h.update(f"column {name}\n".encode())
+        kind = column.dtype.kind if isinstance(column.dtype, np.dtype) else "O"
+        if kind in "iub":
+            h.update(np.ascontiguousarray(column.to_numpy(), dtype="<i8").tobytes())
+        elif kind == "f":
+            h.update(np.ascontiguousarray(column.to_numpy(), dtype="<f8").tobytes())
+        else:
+            for v in column.astype(object):
+                h.update(b"\x00" if v is None or (not isinstance(v, str) and pd.isna(v))
+                         else str(v).encode() + b"\x01")
+    return h.hexdigest()
 
 
 def _restore(d: dict) -> dict:

@@ -1,0 +1,257 @@
+"""Drawing a site's figures: reused when their description did not change, else drawn, in parallel
+when that pays.
+
+Every figure of a page is a :class:`~gnibench.reports.render.Plot` (plain data) with the file it
+goes to. A page's image directory keeps a manifest, :data:`MANIFEST`, of the figures drawn into it:
+per file the hash of its description (:func:`~gnibench.reports.render.plot_key`, which includes the
+renderer's source and matplotlib's version) and the SHA-256 of the PNG written. A figure whose
+key matches and whose file still has the recorded checksum is not drawn again (a report rebuilt
+after a resumed run, or of unchanged results); a file that does not match its checksum is
+redrawn with one warning line. Files of the directory that the page no longer has are removed.
+
+Where the figures are drawn (:class:`Drawers`): when a drawing process was started, each figure
+goes to it as soon as its page has described it (the drawing overlaps the rest of the page's
+preparation); the drawing process imported matplotlib when it started and forks one worker per
+core from itself, so matplotlib is imported once and this process never imports it. The site
+starts the drawing process before it prepares the pages when figures will probably be drawn
+(:func:`likely_to_draw`: an image directory without manifest, or older than its results' tables),
+and ``gnibench run`` before the cells run. Without one, the figures are drawn in this process, or
+by a drawing process started then when there are at least :data:`PARALLEL_MIN` of them and more
+than one core, largest first.
+"""
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+from gnibench.reports.render import Plot, plot_key, render
+from gnibench.suite.foundation.processes import quiet_worker
+
+MANIFEST = "figures.json"
+PARALLEL_MIN = 2          # a fork costs milliseconds, a figure a tenth of a second or more
+
+
+@dataclass
+class Job:
+    """A figure to have in ``path``."""
+
+    plot: Plot
+    path: Path
+    key: str = ""
+
+
+def _digest_file(path: Path) -> str | None:
+    from gnibench.suite.foundation.cache import digest
+
+    try:
+        return digest(path.read_bytes())
+    except OSError:
+        return None
+
+
+def _read_manifest(d: Path) -> dict:
+    try:
+        doc = json.loads((d / MANIFEST).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    return doc if isinstance(doc, dict) else {}
+
+
+def _reusable(job: Job, manifest: dict) -> bool:
+    from gnibench.suite.foundation.cache import warn
+
+    entry = manifest.get(job.path.name)
+    if not isinstance(entry, dict) or entry.get("key") != job.key or not job.path.is_file():
+        return False
+    if _digest_file(job.path) == entry.get("sha256"):
+        return True
+    warn(f"report: {job.path} does not match its recorded checksum; drawn again")
+    return False
+
+
+def _cpus() -> int:
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:                       # not on Linux
+        return os.cpu_count() or 1
+
+
+# -- the drawing process ----------------------------------------------------------------------
+
+def _serve(conn, parent: int, workers: int) -> None:
+    """The drawing process: import matplotlib, then draw what comes ("draw", plot, path) by
+    ``workers`` processes forked from this one; ("wait",) answers None or the failures."""
+    import multiprocessing as mp
+    import traceback
+    from concurrent.futures import ProcessPoolExecutor
+
+    quiet_worker(parent)
+    from matplotlib import font_manager
+    from matplotlib.backends import backend_agg  # noqa: F401
+    from matplotlib.figure import Figure  # noqa: F401
+
+    font_manager.findfont("DejaVu Sans")           # the font list read once, before the forks
+    pool, futures = None, []
+    try:
+        while True:
+            try:
+                message = conn.recv()
+            except (EOFError, OSError):
+                return
+            if message[0] == "draw":
+                if pool is None:
+                    pool = ProcessPoolExecutor(workers, mp_context=mp.get_context("fork"),
+                                               initializer=quiet_worker, initargs=(os.getpid(),))
+                futures.append(pool.submit(render, *message[1:]))
+            elif message[0] == "wait":
+                errors = ["".join(traceback.format_exception(f.exception()))
+                          for f in futures if f.exception() is not None]
+                futures = []
+                conn.send("\n".join(errors) or None)
+            else:
+                return
+    finally:
+        if pool is not None:
+            pool.shutdown(wait=True, cancel_futures=True)
+
+
+class Drawers:
+    """Where the figures are drawn (see the module docstring): :meth:`submit` each, then
+    :meth:`wait`."""
+
+    def __init__(self):
+        self.process, self.conn, self.local = None, None, []
+
+    def start(self, workers: int | None = None) -> Drawers:
+        """Fork the drawing process now (if there is more than one core)."""
+        import multiprocessing as mp
+
+        workers = _cpus() if workers is None else workers
+        if self.process is None and workers >= 2 and "fork" in mp.get_all_start_methods():
+            ctx = mp.get_context("fork")
+            self.conn, child = ctx.Pipe()
+            self.process = ctx.Process(target=_serve, args=(child, os.getpid(), workers),
+                                       name="gnibench-drawing")
+            self.process.start()
+            child.close()
+        return self
+
+    def submit(self, job: Job) -> None:
+        if self.process is None:
+            self.local.append(job)
+        else:
+            self._send(("draw", job.plot, job.path))
+
+    def _send(self, message) -> None:
+        try:
+            self.conn.send(message)
+        except OSError as e:
+            raise RuntimeError(f"the drawing process ended unexpectedly ({e})") from None
+
+    def wait(self) -> None:
+        """Until every figure submitted is drawn; a figure that failed raises here."""
+        local, self.local = sorted(self.local, key=lambda j: -j.plot.cost()), []
+        if self.process is None and len(local) >= PARALLEL_MIN:
+            self.start()
+        if self.process is None:
+            for job in local:
+                render(job.plot, job.path)
+            return
+        for job in local:
+            self.submit(job)
+        self._send(("wait",))
+        try:
+            error = self.conn.recv()
+        except (EOFError, OSError) as e:
+            raise RuntimeError(f"the drawing process ended unexpectedly ({e})") from None
+        if error is not None:
+            raise RuntimeError(f"drawing a figure failed:\n{error}")
+
+    def close(self, now: bool = False) -> None:
+        if self.process is None:
+            return
+        if not now:
+            with contextlib.suppress(OSError, ValueError):
+                self.conn.send(("stop",))
+            self.process.join(timeout=10)
+        if self.process.is_alive():
+            self.process.terminate()
+            self.process.join(timeout=5)
+        self.conn.close()
+        self.process = self.conn = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, kind, *exc) -> None:
+        self.close(now=kind is not None)
+
+
+# -- the figures of a site ----------------------------------------------------------------------
+
+class Figures:
+    """The figures of a site, as the pages describe them (``append`` a :class:`Job`): each is
+    reused or submitted to ``drawers`` at once; :meth:`finish` waits for them, removes the other
+    files of their directories and of ``dirs``, and writes the manifests."""
+
+    def __init__(self, drawers: Drawers, dirs=()):
+        self.drawers = drawers
+        self.by_dir: dict[Path, list[Job]] = {Path(d): [] for d in dirs}
+        self.manifests: dict[Path, dict] = {}
+
+    def append(self, job: Job) -> None:
+        job.key = job.key or plot_key(job.plot)
+        d = job.path.parent
+        self.by_dir.setdefault(d, []).append(job)
+        if d not in self.manifests:
+            d.mkdir(parents=True, exist_ok=True)
+            self.manifests[d] = _read_manifest(d)
+        if not _reusable(job, self.manifests[d]):
+            self.drawers.submit(job)
+
+    def finish(self) -> None:
+        from gnibench.suite.foundation.cache import atomic_write
+
+        self.drawers.wait()
+        for d, jobs in self.by_dir.items():
+            d.mkdir(parents=True, exist_ok=True)
+            keep = {j.path.name for j in jobs}
+            for f in d.iterdir():
+                if f.is_file() and f.name not in keep and f.name != MANIFEST:
+                    f.unlink()
+            doc = {j.path.name: {"key": j.key, "sha256": _digest_file(j.path)} for j in jobs}
+            atomic_write(d / MANIFEST, lambda p, doc=doc: Path(p).write_text(
+                json.dumps(doc, indent=1, sort_keys=True) + "\n", encoding="utf-8"))
+
+
+def likely_to_draw(pairs) -> bool:
+    """Whether some figure will probably be drawn: (results directory, image directory) pairs of
+    which an image directory has no manifest or one older than its results' tables."""
+    for results, img in pairs:
+        try:
+            drawn = (Path(img) / MANIFEST).stat().st_mtime
+            if any((Path(results) / f).stat().st_mtime > drawn
+                   for f in ("cells.parquet", "samples.parquet", "timings.parquet")):
+                return True
+        except OSError:
+            return True
+    return False
+
+
+def early_drawers(pairs) -> Drawers:
+    """A drawing process, started now when figures will probably be drawn and there are cores."""
+    drawers = Drawers()
+    return drawers.start() if likely_to_draw(pairs) else drawers
+
+
+def draw(jobs: list[Job], dirs=(), drawers: Drawers | None = None) -> None:
+    """Have every job's figure in its file, and nothing else in the jobs' directories and in
+    ``dirs`` (see the module docstring)."""
+    with contextlib.nullcontext(drawers) if drawers is not None else Drawers() as used:
+        figures = Figures(used, dirs)
+        for job in jobs:
+            figures.append(job)
+        figures.finish()

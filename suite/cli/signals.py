@@ -1,0 +1,200 @@
+"""SIGINT and SIGTERM, honoured from the start of a command to its end.
+
+Handlers. :func:`handling` installs handlers for SIGINT and SIGTERM (the console script installs
+simpler ones even earlier, :mod:`gnibench.suite.cli.entry`), also when the parent ignored SIGINT:
+a shell starts background jobs (``gnibench ... &``) with SIGINT ignored and Python keeps an
+inherited SIG_IGN, so ``kill -INT`` was lost. Both signals raise KeyboardInterrupt in the main
+thread, so every ``except KeyboardInterrupt`` path (a solve writes its samples so far, a run
+stores its tables) serves both; the exit code is 128 + the signal (130, 143).
+
+Where an interrupt is not raised. Python runs a handler between bytecodes of the main thread,
+wherever that is, and an exception raised in a ctypes callback, a ``__del__`` or a weakref
+callback is printed and dropped ("Exception ignored ..."). numba's compiler runs llvmlite's
+ctypes callbacks: a Ctrl-C during a cold compile was swallowed there, the compile went on (or
+failed later with numba's state half-updated) and the integration ran for hours. So the handler
+does not raise while the main thread is inside numba or llvmlite (it marks the signal pending),
+a KeyboardInterrupt dropped anywhere else marks it pending too (``sys.unraisablehook``), and a
+watchdog thread delivers a pending signal again as soon as the main thread is back in our own
+code.
+
+Late. The watchdog also sleeps on the signal wakeup fd, which the C-level handler writes at
+once: when a signal has not been raised in the main thread ``GRACE`` seconds after it came (a
+long compile, or a long C call holding the main thread), it ends the process with one line and
+the same exit code. Nothing finished is lost: every result file and stored cell is committed by
+an atomic rename (a temporary file may remain, removed by the next run), and pool workers die
+with their parent (:mod:`gnibench.suite.runs.executors`).
+"""
+from __future__ import annotations
+
+import contextlib
+import os
+import select
+import signal
+import sys
+import threading
+import time
+
+GRACE = 1.0                 # seconds the main thread has to raise a signal before a hard exit
+POLL = 0.02                 # how often the watchdog looks while a signal is pending
+SIGNALS = (signal.SIGINT, signal.SIGTERM)
+NAMES = {signal.SIGINT: "interrupted", signal.SIGTERM: "terminated"}
+UNSAFE = ("numba", "llvmlite")     # packages in which an exception may be dropped
+
+
+class _State:
+    def __init__(self):
+        self.received: int | None = None        # the last signal (its number)
+        self.raised_at = -1e300                 # when the handler last raised (monotonic)
+        self.pending: int | None = None         # a signal to raise again in our own code
+        self.origin: float | None = None        # since when a signal waits to be raised
+        self.lock = threading.Lock()
+        self.active = False
+        self.stop = threading.Event()
+        self.previous_unraisable = None
+
+
+_state = _State()
+
+
+def exit_code(default: int = 130) -> int:
+    return 128 + _state.received if _state.received else default
+
+
+def message() -> str:
+    return NAMES.get(_state.received, "interrupted")
+
+
+def _unsafe(frame) -> bool:
+    """Is this frame, or a caller of it, in numba or llvmlite?"""
+    depth = 0
+    while frame is not None and depth < 400:
+        name = frame.f_globals.get("__name__", "")
+        if name.partition(".")[0] in UNSAFE:
+            return True
+        frame, depth = frame.f_back, depth + 1
+    return False
+
+
+def _handler(signum, frame):
+    now = time.monotonic()
+    with _state.lock:
+        _state.received = signum
+        if _unsafe(frame):
+            _state.pending = signum
+            _state.origin = _state.origin or now
+            return
+        _state.pending, _state.origin = None, None
+        _state.raised_at = now
+    raise KeyboardInterrupt
+
+
+def _unraisable(unraisable) -> None:
+    if issubclass(unraisable.exc_type, KeyboardInterrupt) and _state.received:
+        with _state.lock:                       # dropped: raise it again where it can propagate
+            _state.pending = _state.received
+            _state.origin = _state.origin or _state.raised_at
+        return
+    previous = _state.previous_unraisable or sys.__unraisablehook__
+    previous(unraisable)
+
+
+def quiet() -> None:
+    """After an interrupt: no 'Exception ignored in ...' tracebacks from objects half-built when
+    it came (restored when the command ends)."""
+    sys.unraisablehook = lambda unraisable: None
+
+
+def _hard_exit(signum: int) -> None:
+    with contextlib.suppress(OSError):
+        os.write(2, f"gnibench: {NAMES.get(signum, 'interrupted')} (while compiling or in compiled "
+                    f"code; what was finished is kept)\n".encode())
+    os._exit(128 + signum)
+
+
+def _main_frame():
+    return sys._current_frames().get(threading.main_thread().ident)
+
+
+def _watch(read_fd: int) -> None:
+    """Deliver pending signals again; hard exit when one is not raised within GRACE seconds."""
+    came: tuple[int, float] | None = None       # a signal the handler has not raised yet
+    while not _state.stop.is_set():
+        waiting = came is not None or _state.pending is not None
+        ready, _, _ = select.select([read_fd], [], [], POLL if waiting else None)
+        now = time.monotonic()
+        if ready:
+            data = os.read(read_fd, 64)
+            if not data:
+                return
+            got = [b for b in data if b in SIGNALS]
+            if got and came is None:
+                came = (got[-1], now)
+        with _state.lock:
+            if not _state.active:
+                return
+            if came is not None and _state.raised_at >= came[1] - GRACE:
+                came = None                      # raised (just before this thread woke, maybe)
+            signum, origin = _state.pending, _state.origin
+        if signum is not None:
+            if now - origin > GRACE:
+                _hard_exit(signum)
+            if not _unsafe(_main_frame()):
+                with _state.lock:
+                    _state.pending = None
+                came = (signum, now)
+                signal.pthread_kill(threading.main_thread().ident, signum)
+            continue
+        if came is not None and now - came[1] > GRACE:
+            _hard_exit(came[0])
+
+
+def _after_fork_in_child() -> None:
+    """A forked child (a pool worker) must not write into its parent's wakeup pipe, nor act on
+    the parent's handlers: the default dispositions until the worker sets its own."""
+    if not _state.active:
+        return
+    _state.active = False
+    with contextlib.suppress(ValueError, OSError):
+        signal.set_wakeup_fd(-1)
+    for s in SIGNALS:
+        with contextlib.suppress(ValueError, OSError):
+            signal.signal(s, signal.SIG_DFL)
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_after_fork_in_child)
+
+
+@contextlib.contextmanager
+def handling():
+    """The handlers and the watchdog for the duration of a command (only in the main thread; the
+    previous handlers are restored afterwards)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    _state.received, _state.raised_at, _state.pending, _state.origin = None, -1e300, None, None
+    _state.stop.clear()
+    previous = {s: signal.signal(s, _handler) for s in SIGNALS}
+    _state.previous_unraisable, sys.unraisablehook = sys.unraisablehook, _unraisable
+    read_fd, write_fd = os.pipe()
+    os.set_blocking(write_fd, False)
+    old_wakeup = signal.set_wakeup_fd(write_fd, warn_on_full_buffer=False)
+    _state.active = True
+    watcher = threading.Thread(target=_watch, args=(read_fd,), name="gnibench-signals",
+                               daemon=True)
+    watcher.start()
+    try:
+        yield
+    finally:
+        with _state.lock:
+            _state.active = False
+            _state.pending = None
+        _state.stop.set()
+        sys.unraisablehook = _state.previous_unraisable
+        signal.set_wakeup_fd(old_wakeup)
+        for s, h in previous.items():
+            signal.signal(s, h if h is not None else signal.SIG_DFL)
+        os.close(write_fd)                     # the watchdog reads EOF and ends
+        watcher.join(timeout=5)
+        with contextlib.suppress(OSError):
+            os.close(read_fd)

@@ -1,0 +1,285 @@
+"""Careless and hostile input to the command line (issue 18): one line, exit 2, nothing written,
+before any work; faults during work (a full disk, a closed pipe) are one line and lose nothing
+finished.
+
+Classes: numbers (one ASCII grammar everywhere), output files (regular files only, probed before
+work), budgets given as environment variables, the report and bench commands, ``verify --list``,
+standard streams that close or fill up.
+"""
+from __future__ import annotations
+
+import errno
+import json
+import os
+import stat
+import subprocess
+import sys
+from pathlib import Path
+
+import pandas as pd
+import pytest
+from gnibench.suite.cli.main import main
+from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.outputs import check_output_file
+
+GNIBENCH = str(Path(sys.executable).with_name("gnibench"))
+OSC = "harmonic-oscillator"
+SOLVE = ["solve", OSC, "rk4:h=0.1", "--steps", "20"]
+TINY = """
+name = "tiny"
+title = "Tiny"
+reference = "[HLW] (2.2)"
+steps = 40
+every = 10
+
+[[cells]]
+problems = ["harmonic-oscillator", "pendulum"]
+methods = ["rk4"]
+vary.h = [0.05, 0.1]
+"""
+
+
+def one_error_line(code, err, status=2):
+    lines = err.strip().splitlines()
+    assert code == status, err
+    assert len(lines) == 1 and lines[0].startswith("gnibench: error:"), err
+    assert "Traceback" not in err
+    return lines[0]
+
+
+def run(argv, capsys):
+    code = main(argv)
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+# ---- numbers: one grammar for every option and budget ---------------------------------------
+
+BAD_NUMBERS = ["١٠", "1_0", "inf", "nan", "1e400", "0x10", "", " "]
+NUMBER_OPTIONS = {
+    "--steps": ["solve", OSC, "rk4:h=0.1", "--steps", "{}"],
+    "--t-end": ["solve", OSC, "rk4:h=0.1", "--t-end", "{}"],
+    "--every": ["solve", OSC, "rk4:h=0.1", "--steps", "10", "--every", "{}"],
+    "--dt-out": ["solve", OSC, "rk4:h=0.1", "--steps", "10", "--dt-out", "{}"],
+    "--section": ["solve", "henon-heiles", "rk4:h=0.1", "--steps", "10", "--section", "{}"],
+    "-j": ["run", "quick", "-j", "{}"],
+    "--accuracy": ["report", ".", "--accuracy", "{}"],
+    "bench --steps": ["bench", "--steps", "{}"],
+    "--threshold": ["bench", "--threshold", "{}"],
+}
+
+
+@pytest.mark.parametrize("text", BAD_NUMBERS)
+@pytest.mark.parametrize("option", list(NUMBER_OPTIONS))
+def test_numbers_are_ascii_finite_and_checked_before_work(option, text, capsys, tmp_path,
+                                                          monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    argv = [a.format(text) for a in NUMBER_OPTIONS[option]]
+    code, out, err = run(argv, capsys)
+    line = one_error_line(code, err)
+    assert option.split()[-1] in line
+    assert out == "" and not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("value", ["1e14", "100000000000000"])
+def test_integral_counts_may_use_an_exponent(value, capsys):
+    """--steps 1e14 is a number of steps (refused here by the step budget, not as text)."""
+    code, _out, err = run(["solve", OSC, "rk4:h=0.1", "--steps", value], capsys)
+    assert "GNIBENCH_MAX_STEPS" in one_error_line(code, err)
+
+
+@pytest.mark.parametrize("name", ["GNIBENCH_MAX_STEPS", "GNIBENCH_MAX_ROWS",
+                                  "GNIBENCH_MAX_OUTPUT_MB", "GNIBENCH_MAX_CELLS"])
+@pytest.mark.parametrize("text", ["inf", "-inf", "nan", "1_0", "١٠", "0", "-5", "2.5", "lots"])
+def test_budget_variables_are_checked_before_work(name, text, capsys, monkeypatch, tmp_path):
+    monkeypatch.setenv(name, text)
+    out_path = tmp_path / "x.csv"
+    code, _out, err = run(SOLVE + ["-o", str(out_path)], capsys)
+    assert name in one_error_line(code, err)
+    assert not out_path.exists()
+
+
+def test_budget_variables_accept_exponents(capsys, monkeypatch):
+    monkeypatch.setenv("GNIBENCH_MAX_STEPS", "1e3")
+    code, _out, err = run(["solve", OSC, "rk4:h=0.1", "--steps", "1001"], capsys)
+    assert "at most 1000" in one_error_line(code, err)
+    assert run(["solve", OSC, "rk4:h=0.1", "--steps", "1000"], capsys)[0] == 0
+
+
+# ---- output files: regular files only ----------------------------------------------------------
+
+def test_fifo_and_symlink_outputs_are_refused_and_left_alone(tmp_path, capsys):
+    fifo = tmp_path / "fifo.csv"
+    os.mkfifo(fifo)
+    target = tmp_path / "target.csv"
+    target.write_text("keep me\n")
+    link = tmp_path / "link.csv"
+    link.symlink_to(target)
+    for path, kind in ((fifo, "FIFO"), (link, "symlink")):
+        for fmt in ("csv", "json", "parquet"):
+            code, _out, err = run(SOLVE + ["--format", fmt, "-o", str(path)], capsys)
+            assert kind in one_error_line(code, err)
+    assert stat.S_ISFIFO(fifo.lstat().st_mode) and link.is_symlink()
+    assert target.read_text() == "keep me\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["fifo.csv", "link.csv", "target.csv"]
+
+
+@pytest.mark.parametrize("device", ["/dev/null", "/dev/full"])
+def test_device_outputs_are_refused(device):
+    """Checked on the real devices without writing (run as root, a rename would replace them)."""
+    with pytest.raises(UserError, match="character device"):
+        check_output_file(Path(device))
+
+
+@pytest.mark.parametrize("place", ["/proc/gnibench-x.csv", "/proc/self/x.csv", "/sys/x.csv"])
+def test_outputs_where_nothing_can_be_created_are_refused(place, capsys):
+    if not Path(place).parent.is_dir():
+        pytest.skip(f"no {Path(place).parent}")
+    code, _out, err = run(SOLVE + ["-o", place], capsys)
+    assert "cannot write" in one_error_line(code, err) or "not writable" in err
+
+
+def test_disk_full_while_writing_is_one_line_and_leaves_nothing(tmp_path, capsys, monkeypatch):
+    """ENOSPC in solve -o, simulated in the write itself (half a file, then the error)."""
+    out_path = tmp_path / "x.parquet"
+
+    def full(self, path, *a, **k):
+        Path(path).write_bytes(b"PAR1 half")
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(pd.DataFrame, "to_csv", full)
+    code, _, err = run(SOLVE + ["-o", str(tmp_path / "x.csv")], capsys)
+    assert "No space left on device" in one_error_line(code, err, status=1)
+    import pyarrow.parquet as pq
+
+    monkeypatch.setattr(pq, "write_table", lambda table, path, **k: full(None, path))
+    code, _out, err = run(SOLVE + ["--format", "parquet", "-o", str(out_path)], capsys)
+    assert "No space left on device" in one_error_line(code, err, status=1)
+    assert not list(tmp_path.iterdir())          # no result, no temporary file
+
+
+def test_stdout_on_a_full_device_is_one_line():
+    with open("/dev/full", "w") as full:
+        p = subprocess.run([GNIBENCH, *SOLVE], stdout=full, stderr=subprocess.PIPE, text=True,
+                           timeout=300, check=False)
+    assert "No space left on device" in one_error_line(p.returncode, p.stderr, status=1)
+
+
+def test_disk_full_during_a_run_keeps_the_stored_cells_and_a_rerun_completes(tmp_path, capsys,
+                                                                            monkeypatch):
+    from gnibench.suite.runs import store
+
+    exp = tmp_path / "tiny.toml"
+    exp.write_text(TINY)
+    whole, full = tmp_path / "whole", tmp_path / "full"
+    assert main(["run", str(exp), "-o", str(whole), "-j", "1", "--no-report"]) == 0
+    written = []
+    real = store.Store.write
+
+    def write(self, key, part, empty):
+        if len(written) == 2:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        written.append(key)
+        real(self, key, part, empty)
+
+    monkeypatch.setattr(store.Store, "write", write)
+    capsys.readouterr()
+    code = main(["run", str(exp), "-o", str(full), "-j", "1", "--no-report"])
+    err = [ln for ln in capsys.readouterr().err.splitlines() if not ln.startswith("[")]
+    assert code == 1 and err[-1].startswith("gnibench: error:"), err
+    assert "No space left on device" in err[-1] and "2 of 4 cells are stored" in err[-1]
+    assert len(list((full / "parts").glob("*.parquet"))) == 2
+    monkeypatch.setattr(store.Store, "write", real)
+    assert main(["run", str(exp), "-o", str(full), "-j", "1", "--no-report"]) == 0
+    assert "(2 reused from the store, 2 to compute)" in capsys.readouterr().err
+    for name in ("samples.parquet", "cells.parquet"):
+        assert (full / name).read_bytes() == (whole / name).read_bytes()
+
+
+# ---- report and bench -------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def results(tmp_path_factory):
+    d = tmp_path_factory.mktemp("results")
+    (d / "tiny.toml").write_text(TINY)
+    assert main(["run", str(d / "tiny.toml"), "-o", str(d / "out"), "-j", "1", "--no-report"]) == 0
+    return d / "out"
+
+
+def test_report_to_an_existing_file_or_a_read_only_place(results, tmp_path, capsys):
+    taken = tmp_path / "site"
+    taken.write_text("not a directory")
+    for site, needle in ((taken, "not a directory"), (Path("/proc/site"), "cannot write")):
+        code, _out, err = run(["report", str(results), "-o", str(site)], capsys)
+        assert needle in one_error_line(code, err)
+    assert taken.read_text() == "not a directory"
+
+
+@pytest.mark.parametrize("damage", ["truncate", "garbage", "empty"])
+def test_report_of_a_damaged_table_is_one_line(results, tmp_path, capsys, damage):
+    import shutil
+
+    copy = tmp_path / "copy"
+    shutil.copytree(results, copy)
+    cells = copy / "cells.parquet"
+    raw = cells.read_bytes()
+    cells.write_bytes({"truncate": raw[: len(raw) // 2], "garbage": b"x" * 100,
+                       "empty": b""}[damage])
+    code, _out, err = run(["report", str(copy), "-o", str(tmp_path / "site")], capsys)
+    assert "cells.parquet" in one_error_line(code, err)
+
+
+def test_bench_storage_that_is_a_file_is_refused_before_timing(tmp_path, capsys, monkeypatch):
+    from gnibench.suite.runs import bench
+
+    def never(*a, **k):
+        raise AssertionError("the benchmark ran before its storage was checked")
+
+    monkeypatch.setattr(bench, "bench", never)
+    storage = tmp_path / "bench"
+    storage.write_text("a file")
+    code, out, err = run(["bench", "--storage", str(storage)], capsys)
+    assert "--storage" in one_error_line(code, err)
+    code, out, err = run(["bench", "--steps", "1e14"], capsys)
+    assert "GNIBENCH_MAX_STEPS" in one_error_line(code, err) and out == ""
+
+
+# ---- verify --list --------------------------------------------------------------------------
+
+def test_verify_list_speaks_json_and_refuses_run_options(capsys, tmp_path):
+    code, out, err = run(["verify", "--list", "--format", "json"], capsys)
+    assert code == 0 and err == ""
+    rows = json.loads(out)
+    assert rows and {"id", "expected", "citation"} <= set(rows[0])
+    code, text, err = run(["verify", "--list"], capsys)
+    assert code == 0 and [r["id"] for r in rows] == [ln.split()[0] for ln in text.splitlines()]
+    for extra in (["-o", str(tmp_path / "x")], ["-j", "3"], ["--no-report"]):
+        code, out, err = run(["verify", "--list", *extra], capsys)
+        assert "does not apply with --list" in one_error_line(code, err)
+    assert not (tmp_path / "x").exists()
+
+
+# ---- standard streams -----------------------------------------------------------------------
+
+@pytest.mark.parametrize("argv", [["list", "methods"], SOLVE[:-1] + ["20000"]])
+def test_a_reader_that_stops_reading_ends_nothing(argv):
+    """``gnibench ... | head -1``: the first line arrives, nothing else is said, exit 0."""
+    p = subprocess.Popen([GNIBENCH, *argv], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    first = p.stdout.readline()
+    p.stdout.close()
+    err = p.stderr.read().decode()
+    assert p.wait(timeout=300) == 0, err
+    assert first and err == ""
+
+
+def test_a_run_goes_on_when_its_progress_reader_goes_away(tmp_path):
+    """``gnibench run ... 2>&1 | head -1``: the run completes and writes its tables."""
+    exp = tmp_path / "tiny.toml"
+    exp.write_text(TINY)
+    p = subprocess.Popen([GNIBENCH, "run", str(exp), "-o", str(tmp_path / "out"), "-j", "1",
+                          "--no-report"], stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+    assert p.stdout.readline().startswith(b"gnibench: tiny:")
+    p.stdout.close()
+    assert p.wait(timeout=300) == 0
+    assert (tmp_path / "out" / "cells.parquet").is_file()
+    assert len(pd.read_parquet(tmp_path / "out" / "cells.parquet")) == 4

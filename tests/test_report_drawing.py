@@ -1,0 +1,151 @@
+"""Drawing the report's figures: plain tick labels, the cache of drawn figures (keyed by the hash of
+their description, verified by the PNG's checksum, stale files removed), parallel drawing giving
+the same files as serial drawing, a rebuilt site drawing nothing."""
+from __future__ import annotations
+
+import json
+import os
+import re
+
+import numpy as np
+import pytest
+from gnibench.reports import drawing
+from gnibench.reports.drawing import MANIFEST, Drawers, Job, draw, likely_to_draw
+from gnibench.reports.render import Panel, Plot, Series, plain_label, plot_key
+from gnibench.reports.site import build_site
+from support_reports import make_results
+
+
+def small_plot(scale: float = 1.0, colour: str = "#1F78B4", log: bool = True) -> Plot:
+    t = np.linspace(0.1, 100.0, 200)
+    panel = Panel(xscale="log" if log else "linear", yscale="log", xlabel="t", ylabel="err",
+                  title="a panel", grid=True, legend={"fontsize": 7})
+    panel.series.append(Series(t, scale * (1e-8 + t**2), {"color": colour, "label": "c0 rk4"}))
+    return Plot((4.0, 3.0), 1, 1, [panel], {"left": 0.2, "right": 0.95, "bottom": 0.2, "top": 0.9})
+
+
+@pytest.mark.parametrize("text, plain", [
+    (r"$\mathdefault{10^{-5}}$", "10⁻⁵"),
+    (r"$\mathdefault{10^{12}}$", "10¹²"),
+    (r"$\mathdefault{2\times10^{3}}$", "2\u2009×\u200910³"),
+    (r"$\mathdefault{-10^{2}}$", "−10²"),
+    (r"$\mathdefault{5\times10^{-7}}$", "5\u2009×\u200910⁻⁷"),
+    ("", ""), ("0.5", "0.5"),
+    (r"$\alpha^{2}$", r"$\alpha^{2}$"),                   # not a log label: left to mathtext
+    (r"$\mathdefault{10^{1.50}}$", r"$\mathdefault{10^{1.50}}$"),
+])
+def test_plain_log_labels(text, plain):
+    assert plain_label(text) == plain
+
+
+def test_key_follows_data_and_style():
+    key = plot_key(small_plot())
+    assert key == plot_key(small_plot())
+    bumped = small_plot()
+    bumped.panels[0].series[0].y[7] = np.nextafter(bumped.panels[0].series[0].y[7], np.inf)
+    others = [bumped, small_plot(colour="#000000"), small_plot(log=False)]
+    relabelled = small_plot()
+    relabelled.panels[0].series[0].style["label"] = "c1 rk4"
+    resized = small_plot()
+    resized.size = (4.0, 3.5)
+    assert len({key} | {plot_key(p) for p in others + [relabelled, resized]}) == 6
+
+
+@pytest.fixture
+def serial_count(monkeypatch):
+    """Draw in this process and count the figures drawn."""
+    count = {"n": 0}
+    real = drawing.render
+
+    def render(plot, path):
+        count["n"] += 1
+        real(plot, path)
+
+    monkeypatch.setattr(drawing, "_cpus", lambda: 1)
+    monkeypatch.setattr(drawing, "render", render)
+    return count
+
+
+def test_cache_reuses_verifies_and_removes_stale_files(tmp_path, serial_count, capsys):
+    d = tmp_path / "img" / "page"
+    jobs = [Job(small_plot(1.0), d / "a.png"), Job(small_plot(2.0), d / "b.png")]
+    draw(jobs)
+    assert serial_count["n"] == 2 and (d / "a.png").is_file() and (d / "b.png").is_file()
+    manifest = json.loads((d / MANIFEST).read_text())
+    assert set(manifest) == {"a.png", "b.png"}
+
+    draw([Job(small_plot(1.0), d / "a.png"), Job(small_plot(2.0), d / "b.png")])
+    assert serial_count["n"] == 2                               # unchanged: nothing drawn
+
+    draw([Job(small_plot(1.0), d / "a.png"), Job(small_plot(3.0), d / "b.png")])
+    assert serial_count["n"] == 3                               # b's data changed
+    assert capsys.readouterr().err == ""
+
+    with open(d / "a.png", "ab") as f:                          # damaged: drawn again, one line
+        f.write(b"\0")
+    (d / "stray.png").write_bytes(b"x")
+    draw([Job(small_plot(1.0), d / "a.png")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert serial_count["n"] == 4
+    assert len(err) == 1 and "a.png does not match its recorded checksum" in err[0]
+    assert sorted(f.name for f in d.iterdir()) == ["a.png", MANIFEST]   # b and stray removed
+    assert set(json.loads((d / MANIFEST).read_text())) == {"a.png"}
+
+    (d / MANIFEST).write_text("{not json")                      # an unreadable manifest: redrawn
+    draw([Job(small_plot(1.0), d / "a.png")])
+    assert serial_count["n"] == 5
+
+
+def test_parallel_drawing_gives_the_serial_files(tmp_path, monkeypatch):
+    plots = [small_plot(1.0), small_plot(2.0, colour="#D55E00"), small_plot(3.0, log=False)]
+    monkeypatch.setattr(drawing, "_cpus", lambda: 2)
+    draw([Job(p, tmp_path / "par" / f"{i}.png") for i, p in enumerate(plots)])
+    monkeypatch.setattr(drawing, "_cpus", lambda: 1)
+    draw([Job(p, tmp_path / "ser" / f"{i}.png") for i, p in enumerate(plots)])
+    for i in range(3):
+        assert (tmp_path / "par" / f"{i}.png").read_bytes() == \
+            (tmp_path / "ser" / f"{i}.png").read_bytes()
+
+
+def test_likely_to_draw(tmp_path):
+    results, img = tmp_path / "results", tmp_path / "img"
+    results.mkdir()
+    for f in ("cells.parquet", "samples.parquet", "timings.parquet"):
+        (results / f).write_bytes(b"")
+    assert likely_to_draw([(results, img)])                     # never drawn
+    img.mkdir()
+    (img / MANIFEST).write_text("{}")
+    os.utime(results / "cells.parquet", (1, 1))
+    os.utime(results / "samples.parquet", (1, 1))
+    os.utime(results / "timings.parquet", (1, 1))
+    assert not likely_to_draw([(results, img)])                 # drawn after the tables
+    os.utime(results / "samples.parquet")
+    os.utime(img / MANIFEST, (2, 2))
+    assert likely_to_draw([(results, img)])                     # tables newer than the drawing
+
+
+def test_rebuilt_site_draws_nothing_and_says_the_same(tmp_path, monkeypatch):
+    results = make_results(tmp_path, monkeypatch)
+    site = tmp_path / "site"
+    build_site([results], site)
+    pngs = sorted((site / "img" / "hostile").glob("*.png"))
+    assert len(pngs) >= 3
+    stamps = {p.name: p.stat().st_mtime_ns for p in pngs}
+    def page() -> str:                                          # but the time it was made
+        return re.sub(r"\d{4}-\d\d-\d\d \d\d:\d\d", "T", (site / "hostile.html").read_text())
+
+    html = page()
+    build_site([results], site)
+    assert {p.name: p.stat().st_mtime_ns for p in pngs} == stamps
+    assert page() == html
+
+
+def test_a_failing_figure_is_an_error_of_the_drawing_process(tmp_path):
+    bad = small_plot()
+    bad.panels[0].series[0].style["no_such_property"] = 1
+    drawers = Drawers().start(2)
+    with drawers, pytest.raises(RuntimeError, match="no_such_property"):
+        drawers.submit(Job(small_plot(), tmp_path / "good.png"))
+        drawers.submit(Job(bad, tmp_path / "bad.png"))
+        drawers.wait()
+    assert (tmp_path / "good.png").is_file() and drawers.process is None

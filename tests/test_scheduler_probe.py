@@ -1,0 +1,99 @@
+"""``--scheduler ADDRESS``: a peer that is not a Dask scheduler fails in one line, within the
+timeout for the whole exchange, before the output directory exists (issue 18, Dask cases)."""
+from __future__ import annotations
+
+import socket
+import threading
+import time
+
+import pytest
+from gnibench.suite.cli.main import main
+from gnibench.suite.foundation.errors import UserError
+
+pytest.importorskip("distributed")
+from gnibench.suite.runs.scheduler import probe
+
+SAFETY = 60.0
+
+
+class Peer:
+    """A TCP server on localhost that accepts and then says ``reply`` (or nothing)."""
+
+    def __init__(self, reply: bytes | None):
+        self.reply, self.connections = reply, []
+        self.sock = socket.socket()
+        self.sock.bind(("127.0.0.1", 0))
+        self.sock.listen(16)
+        self.address = f"tcp://127.0.0.1:{self.sock.getsockname()[1]}"
+        threading.Thread(target=self._serve, daemon=True).start()
+
+    def _serve(self):
+        while True:
+            try:
+                conn, _ = self.sock.accept()
+            except OSError:
+                return
+            self.connections.append(conn)
+            if self.reply is not None:
+                conn.sendall(self.reply)
+
+    def close(self):
+        self.sock.close()
+        for c in self.connections:
+            c.close()
+
+
+@pytest.fixture
+def peer(request):
+    p = Peer(request.param)
+    yield p
+    p.close()
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.mark.parametrize("peer", [None], indirect=True)
+def test_a_peer_that_never_answers_fails_within_the_timeout(peer):
+    t0 = time.monotonic()
+    with pytest.raises(UserError, match="sent nothing"):
+        probe(peer.address, timeout=1.0)
+    assert time.monotonic() - t0 < SAFETY
+
+
+@pytest.mark.parametrize("peer", [b"HTTP/1.0 200 OK\r\nContent-Type: text/html\r\n\r\nhello\n",
+                                  b"\xff" * 64], indirect=True)
+def test_a_server_of_another_protocol_is_not_a_scheduler(peer, tmp_path, capsys):
+    out = tmp_path / "out"
+    code = main(["run", "quick", "-o", str(out), "--executor", "dask", "--scheduler",
+                 peer.address])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and "Dask" in err[0], err
+    assert not out.exists()
+
+
+def test_a_closed_port_fails_at_once_and_creates_nothing(tmp_path, capsys):
+    out = tmp_path / "out"
+    address = f"tcp://127.0.0.1:{_free_port()}"
+    code = main(["run", "quick", "-o", str(out), "--executor", "dask", "--scheduler", address])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and "cannot connect" in err[0], err
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("address", ["tcp://[::1", "tcp://127.0.0.1:notaport", "inproc://nowhere",
+                                     "tcp://name.invalid:8786"])
+def test_malformed_or_unknown_addresses(address):
+    with pytest.raises(UserError, match="bad --scheduler"):
+        probe(address, timeout=5.0)
+
+
+def test_a_real_scheduler_answers():
+    from distributed import LocalCluster
+
+    with LocalCluster(n_workers=0, processes=False, dashboard_address=None) as cluster:
+        info = probe(cluster.scheduler_address, timeout=10.0)
+    assert info["type"] == "Scheduler"

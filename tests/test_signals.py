@@ -1,0 +1,214 @@
+"""SIGINT and SIGTERM from the first instruction to the last; workers die with their parent; a
+lock whose owner is gone is taken over (issue 18, item 2).
+
+Every test waits for a condition (a line on stderr, a file in the cache, a stored part), never
+for a time: a loaded machine makes things slower, not different. Timeouts are safety nets only.
+"""
+from __future__ import annotations
+
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+GNIBENCH = str(Path(sys.executable).with_name("gnibench"))
+SAFETY = 300.0                     # seconds: only a hang reaches this
+LONG = ["solve", "kepler-2d", "rk4:h=1e-9", "--t-end", "10000", "--every", "100000000"]
+SLOW = """
+name = "slow"
+title = "Twelve slow cells"
+reference = "[HLW] (2.2)"
+steps = 10000000
+every = 2500000
+
+[[cells]]
+problems = ["kepler-2d"]
+methods = ["rk4"]
+vary.h = [1e-4, 2e-4, 3e-4, 4e-4, 5e-4, 6e-4, 7e-4, 8e-4, 9e-4, 1e-3, 1.1e-3, 1.2e-3]
+"""
+
+
+def wait_for(condition, what: str, proc=None):
+    deadline = time.monotonic() + SAFETY
+    while not condition():
+        assert proc is None or proc.poll() is None, f"the process ended before {what}"
+        assert time.monotonic() < deadline, f"no {what} within {SAFETY} s"
+        time.sleep(0.02)
+
+
+def stderr_line(proc, needle: str) -> list[str]:
+    """Read stderr lines until one contains ``needle`` (the lines read so far)."""
+    lines = []
+    deadline = time.monotonic() + SAFETY
+    while time.monotonic() < deadline:
+        line = proc.stderr.readline()
+        assert line, f"stderr closed before a line with {needle!r}: {lines}"
+        lines.append(line)
+        if needle in line:
+            return lines
+    raise AssertionError(f"no line with {needle!r} within {SAFETY} s")
+
+
+def ended(proc, lines_before=()) -> tuple[int, list[str]]:
+    proc.wait(timeout=SAFETY)
+    err = list(lines_before) + proc.stderr.read().splitlines(keepends=True)
+    assert not any("Traceback" in ln or "Exception ignored" in ln for ln in err), "".join(err)
+    return proc.returncode, [ln.rstrip("\n") for ln in err]
+
+
+def ignoring_sigint(argv: list[str]) -> list[str]:
+    """``argv`` started with SIGINT ignored, as a shell starts ``gnibench ... &`` (an ignored
+    signal stays ignored across exec; the process keeps its pid)."""
+    return [sys.executable, "-c", ("import os, signal, sys; signal.signal(signal.SIGINT, "
+            "signal.SIG_IGN); os.execv(sys.argv[1], sys.argv[1:])"), *argv]
+
+
+def test_sigint_to_a_background_solve_stops_it_and_keeps_the_samples(tmp_path):
+    out = tmp_path / "partial.csv"
+    proc = subprocess.Popen(ignoring_sigint([GNIBENCH, *LONG, "-o", str(out)]),
+                            stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True,
+                            env={**os.environ, "GNIBENCH_MAX_STEPS": "1e14"})
+    before = stderr_line(proc, "%")            # the integration runs (first progress line)
+    proc.send_signal(signal.SIGINT)
+    code, err = ended(proc, before)
+    assert code == 130 and err[-1] == "gnibench: interrupted"
+    lines = out.read_text().splitlines()
+    assert lines[0].startswith("t,") and len(lines) >= 2
+
+
+def test_sigterm_is_honoured_like_sigint(tmp_path):
+    out = tmp_path / "partial.csv"
+    proc = subprocess.Popen([GNIBENCH, *LONG, "-o", str(out)], stderr=subprocess.PIPE,
+                            stdout=subprocess.DEVNULL, text=True,
+                            env={**os.environ, "GNIBENCH_MAX_STEPS": "1e14"})
+    before = stderr_line(proc, "%")
+    proc.send_signal(signal.SIGTERM)
+    code, err = ended(proc, before)
+    assert code == 143 and err[-1] == "gnibench: terminated"
+    assert len(out.read_text().splitlines()) >= 2
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_during_a_cold_compile_ends_the_command_and_the_cache_stays_sound(tmp_path,
+                                                                                   signum):
+    """Empty kernel cache: the signal comes while numba compiles (the cell's module is written,
+    its compilation runs); the command ends with one line, and the next command compiles and
+    runs from the same cache as if nothing had happened."""
+    cache = tmp_path / "cache"
+    env = {**os.environ, "GNIBENCH_MAX_STEPS": "1e14", "GNIBENCH_CACHE_DIR": str(cache)}
+    proc = subprocess.Popen(ignoring_sigint([GNIBENCH, *LONG, "-o", str(tmp_path / "p.csv")]),
+                            stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True, env=env)
+    wait_for(lambda: any((cache / "kernels").glob("cell_*.py")), "kernel module", proc)
+    proc.send_signal(signum)
+    code, err = ended(proc)
+    assert code == 128 + signum and len(err) == 1, err
+    assert err[0].startswith("gnibench: " + ("interrupted" if signum == signal.SIGINT
+                                             else "terminated"))
+    if signum == signal.SIGTERM:          # the cache after an interrupted compile: once is enough
+        return
+    again = subprocess.run([GNIBENCH, "solve", "kepler-2d", "rk4:h=1e-9", "--steps", "5"],
+                           capture_output=True, text=True, env=env, timeout=SAFETY, check=False)
+    assert again.returncode == 0 and again.stderr == "", again.stderr
+    assert len(again.stdout.splitlines()) == 7
+
+
+def _children(pid: int) -> list[int]:
+    found = []
+    for task in Path(f"/proc/{pid}/task").iterdir():
+        found += [int(c) for c in (task / "children").read_text().split()]
+    return found
+
+
+def _gone(pid: int) -> bool:
+    try:
+        status = Path(f"/proc/{pid}/status").read_text()
+    except FileNotFoundError:
+        return True
+    return "\nState:\tZ" in status                 # a zombie has ended
+
+
+def _frozen_pool_run(tmp_path, out):
+    """A ``-j 2`` run frozen (SIGSTOP) the moment its first cell is stored, with its workers'
+    pids: whatever happens to it next happens mid-run, however loaded the machine is."""
+    exp = tmp_path / "slow.toml"
+    exp.write_text(SLOW)
+    for _ in range(5):
+        shutil.rmtree(out, ignore_errors=True)
+        proc = subprocess.Popen([GNIBENCH, "run", str(exp), "-o", str(out), "-j", "2",
+                                 "--no-report"], stderr=subprocess.PIPE,
+                                stdout=subprocess.DEVNULL, text=True)
+        deadline = time.monotonic() + SAFETY
+        while not any((out / "parts").glob("*.parquet")) and proc.poll() is None:
+            assert time.monotonic() < deadline, "no stored cell"
+            time.sleep(0.02)
+        proc.send_signal(signal.SIGSTOP)
+        if proc.poll() is None and len(list((out / "parts").glob("*.parquet"))) < 12:
+            workers = _children(proc.pid)
+            assert len(workers) >= 2, workers
+            return exp, proc, workers
+        proc.kill()
+        proc.wait()
+    raise AssertionError("the run always ended before it could be frozen")
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc and PR_SET_PDEATHSIG")
+def test_sigterm_of_a_pool_run_stops_its_workers_and_keeps_the_stored_cells(tmp_path):
+    out = tmp_path / "out"
+    exp, proc, workers = _frozen_pool_run(tmp_path, out)
+    proc.send_signal(signal.SIGTERM)
+    proc.send_signal(signal.SIGCONT)
+    code, err = ended(proc)
+    assert code == 143 and err[-1] == "gnibench: terminated"
+    wait_for(lambda: all(_gone(w) for w in workers), "end of the workers")
+    stored = len(list((out / "parts").glob("*.parquet")))
+    again = subprocess.run([GNIBENCH, "run", str(exp), "-o", str(out), "-j", "2", "--no-report"],
+                           capture_output=True, text=True, timeout=SAFETY, check=False)
+    assert again.returncode == 0, again.stderr
+    assert f"({stored} reused from the store, {12 - stored} to compute)" in again.stderr
+    assert "warning" not in again.stderr                   # a clean end leaves no lock behind
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc and PR_SET_PDEATHSIG")
+def test_kill_9_of_a_pool_run_leaves_no_orphan_and_the_rerun_takes_the_lock_over(tmp_path):
+    out = tmp_path / "out"
+    exp, proc, workers = _frozen_pool_run(tmp_path, out)
+    proc.kill()
+    proc.wait(timeout=SAFETY)
+    wait_for(lambda: all(_gone(w) for w in workers), "end of the orphaned workers")
+    again = subprocess.run([GNIBENCH, "run", str(exp), "-o", str(out), "-j", "2", "--no-report"],
+                           capture_output=True, text=True, timeout=SAFETY, check=False)
+    assert again.returncode == 0, again.stderr
+    warnings = [ln for ln in again.stderr.splitlines() if "warning" in ln]
+    assert len(warnings) == 1 and f"pid {proc.pid}" in warnings[0] and "taken over" in warnings[0]
+    assert (out / "cells.parquet").is_file()
+
+
+def test_a_lock_held_by_a_leftover_process_is_named(tmp_path, capsys):
+    """The recorded owner is gone but another process holds the flock (an orphan of an older
+    version, say): the error names the holder."""
+    from gnibench.suite.cli.main import main
+
+    out = tmp_path / "out"
+    (out / "parts").mkdir(parents=True)
+    dead = subprocess.Popen(["true"])
+    dead.wait()
+    (out / ".lock").write_text(f"pid {dead.pid}\n")
+    hold = ("import fcntl, sys, time; f = open(sys.argv[1], 'a'); fcntl.flock(f, fcntl.LOCK_EX); "
+            "print('held', flush=True); time.sleep(600)")
+    holder = subprocess.Popen([sys.executable, "-c", hold, str(out / ".lock")],
+                              stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        exp = tmp_path / "slow.toml"
+        exp.write_text(SLOW)
+        assert main(["run", str(exp), "-o", str(out), "-j", "1"]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and f"pid {dead.pid}" in err[0] and str(holder.pid) in err[0], err
+    finally:
+        holder.kill()
+        holder.wait()
