@@ -98,7 +98,7 @@ def build_problem(e: Entry, origin) -> Problem:
         exact = [e.expr(f"exact.{s}", table[s], {**with_y0, "t": tsym}) for s in states]
     check_definition(e, states, syms, params, values, init, integrals, period, exact)
     model = _model(states, list(params), e.table.get("hamiltonian"),
-                   e.table.get("rhs"), {k: v for k, v in texts.items() if k != "H"})
+                   e.table.get("rhs"), {k: e.table_of("integrals")[k] for k in integrals})
     return Problem(
         id=pid, title=e.text("title", pid), reference=e.text("reference", f"user definition "
                                                                         f"({e.source})"),
