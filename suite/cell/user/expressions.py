@@ -12,6 +12,7 @@ rational it writes (``0.1`` is 1/10), so coefficients stay exact.
 from __future__ import annotations
 
 import ast
+import math
 
 FUNCTIONS = ("sqrt", "cbrt", "exp", "log", "sin", "cos", "tan", "asin", "acos", "atan", "atan2",
              "sinh", "cosh", "tanh", "asinh", "acosh", "atanh", "Abs", "abs", "sign")
@@ -36,6 +37,8 @@ def parse(text, names: dict | None = None):
     names = names or {}
     if isinstance(text, bool) or not isinstance(text, (str, int, float)):
         raise ExpressionError(f"{text!r} is not an expression (a number or a text)")
+    if isinstance(text, float) and not math.isfinite(text):
+        raise ExpressionError(f"{text!r} is not a finite number; allowed: numbers within ±1e300")
     if not isinstance(text, str):
         return sp.Integer(text) if isinstance(text, int) else sp.Rational(repr(float(text)))
     if len(text) > MAX_LENGTH:
@@ -112,7 +115,7 @@ class _Builder:
                     self.refuse(node, "an integer of more than 100 digits")
                 return sp.Integer(v)
             segment = ast.get_source_segment(self.text, node) or repr(v)
-            return sp.Rational(segment.replace("_", ""))
+            return self.bounded(node, sp.Rational(segment.replace("_", "")))
         if isinstance(node, ast.Name):
             if node.id in self.names:
                 return self.names[node.id]
