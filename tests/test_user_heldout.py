@@ -287,3 +287,31 @@ def test_non_finite_numbers_in_definitions_are_refused(tmp_path, value, says):
     with pytest.raises(gnibench.UserError, match=says) as err:
         gnibench.load(path)
     assert "initial.q" in str(err.value) and "\n" not in str(err.value)
+
+
+BAD_SOLVERS = '''
+import numpy as np
+def wrong_shape(f, y0, t_span, t_eval, rtol, atol):
+    return np.zeros((len(t_eval), len(y0) + 1))
+def raises(f, y0, t_span, t_eval, rtol, atol):
+    raise RuntimeError("no convergence")
+def bad_count(f, y0, t_span, t_eval, rtol, atol):
+    return {"y": np.tile(y0, (len(t_eval), 1)), "nfev": "many"}
+'''
+
+
+@pytest.mark.parametrize("entry, says", [("wrong_shape", "expected (4, 4)"),
+                                         ("raises", "RuntimeError: no convergence"),
+                                         ("bad_count", "returned nfev = 'many'")])
+def test_a_failing_python_solver_is_a_status(tmp_path, entry, says):
+    """Regression: a python-solver that raised, returned a wrong shape or a bad count crashed
+    the cell (no sample to build a trajectory on); it is status error with the reason, and the
+    initial point as the one sample."""
+    (tmp_path / "bad_solvers.py").write_text(BAD_SOLVERS)
+    (tmp_path / "bad.toml").write_text(f'[[method]]\nid = "bad-{entry}"\nkind = "python-solver"\n'
+                                       f'entry = "bad_solvers:{entry}"\nrtol = 1e-6\natol = 1e-6\n')
+    gnibench.load(tmp_path / "bad.toml")
+    traj = gnibench.solve("kepler-2d", f"bad-{entry}:dt_out=0.5", t_end=1.5)
+    assert traj.status == "error" and says in traj.reason
+    assert len(traj.samples) == 1 and traj.samples["t"].iloc[0] == 0.0
+    assert traj.samples["q1"].iloc[0] == pytest.approx(0.4)

@@ -158,6 +158,15 @@ def _state(value, n: int) -> np.ndarray:
     return y
 
 
+def _count(result: dict, key: str) -> int:
+    """The solver's count ``key`` (a non-negative integer; a ValueError otherwise)."""
+    value = result.get(key, 0)
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer, float)) or \
+            not 0 <= value < 2 ** 62 or int(value) != value:
+        raise ValueError(f"returned {key} = {value!r}; expected a count (an integer >= 0)")
+    return int(value)
+
+
 def _failed(n: int, problem, reason: str) -> EngineRun:
     """A cell whose integrator could not be called: status ``error``, the initial point only."""
     y0 = np.array([problem.record.y0(problem.values)], dtype=float).reshape(1, n)
@@ -232,7 +241,8 @@ def solver(entry: str, base: str, code: str = ""):
             if isinstance(result, dict):
                 status = str(result.get("status", "ok"))
                 reason = "" if status == "ok" else str(result.get("message", ""))
-                steps, reported = int(result.get("steps", 0)), result.get("nfev")
+                steps, reported = _count(result, "steps"), result.get("nfev")
+                reported = None if reported is None else _count(result, "nfev")
                 result = result["y"]
             y = np.asarray(result, dtype=float)
             if y.ndim != 2 or y.shape[1] != n or len(y) > len(t_eval):
@@ -249,9 +259,12 @@ def solver(entry: str, base: str, code: str = ""):
             status, reason = "error", f"the solver returned {len(y)} of {len(t_eval)} samples"
         if status not in ("ok", "nonfinite", "error", "max_steps", "step_too_small"):
             status, reason = "error", f"{entry} returned status {status!r}: {reason}"
+        if not len(y):                  # nothing usable: the initial point, as a failed call
+            y = y0[None, :]
         rows = len(y)
         nfev, counts = np.full(rows, np.nan), np.zeros(rows, dtype=np.int64)
-        if rows:
+        nfev[0] = 0.0
+        if rows > 1:
             nfev[-1] = float(count[0] if reported is None else reported)
             counts[-1] = steps
         info = {"engine": "python", "entry": entry, "steps": "as reported by the solver (last "
