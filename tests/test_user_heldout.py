@@ -315,3 +315,18 @@ def test_a_failing_python_solver_is_a_status(tmp_path, entry, says):
     assert traj.status == "error" and says in traj.reason
     assert len(traj.samples) == 1 and traj.samples["t"].iloc[0] == 0.0
     assert traj.samples["q1"].iloc[0] == pytest.approx(0.4)
+
+
+def test_an_edited_definitions_file_is_solved_as_edited(tmp_path):
+    """Regression: the API reloads an edited file, but the compiled cell of the same specs was
+    kept (keyed by the spec text only): the old initial point and the old vector field."""
+    path = tmp_path / "osc.toml"
+    text = ('[[problem]]\nid = "osc-edit"\nstates = ["q", "p"]\nhamiltonian = "p^2/2 + q^2/2"\n'
+            'initial = {q = 1, p = 0}\n')
+    path.write_text(text)
+    gnibench.load(path)
+    before = gnibench.solve("osc-edit", "kutta38:h=0.01", steps=100).samples.iloc[-1]
+    assert before["q"] == pytest.approx(math.cos(1.0), abs=1e-6)
+    path.write_text(text.replace("q^2/2", "2*q^2").replace("q = 1", "q = 3"))
+    after = gnibench.solve("osc-edit", "kutta38:h=0.01", steps=100).samples.iloc[-1]
+    assert after["q"] == pytest.approx(3 * math.cos(2.0), abs=1e-6)     # omega = 2 now
