@@ -330,3 +330,44 @@ def test_an_edited_definitions_file_is_solved_as_edited(tmp_path):
     path.write_text(text.replace("q^2/2", "2*q^2").replace("q = 1", "q = 3"))
     after = gnibench.solve("osc-edit", "kutta38:h=0.01", steps=100).samples.iloc[-1]
     assert after["q"] == pytest.approx(3 * math.cos(2.0), abs=1e-6)     # omega = 2 now
+
+
+GAUSS2 = ('c = ["1/2 - sqrt(3)/6", "1/2 + sqrt(3)/6"]\nA = [["1/4", "1/4 - sqrt(3)/6"], '
+          '["1/4 + sqrt(3)/6", "1/4"]]\nb = ["1/2", "1/2"]\norder = 4\nkind = "implicit-rk"\n')
+RADAU2 = ('c = ["1/3", 1]\nA = [["5/12", "-1/12"], ["3/4", "1/4"]]\nb = ["3/4", "1/4"]\norder = 3\n'
+          'kind = "implicit-rk"\n')
+TRAPEZOID = 'c = [0, 1]\nA = [[0, 0], ["1/2", "1/2"]]\nb = ["1/2", "1/2"]\norder = 2\nkind = "implicit-rk"\n'
+KUTTA = ('c = [0, "1/3", "2/3", 1]\nA = [[], ["1/3"], ["-1/3", 1], [1, -1, 1]]\n'
+         'b = ["1/8", "3/8", "3/8", "1/8"]\norder = 4\nkind = "explicit-rk"\n')
+LOBATTO = ('kind = "partitioned-rk"\norder = 2\nu = {c = [0, 1], A = [[0, 0], ["1/2", "1/2"]], '
+           'b = ["1/2", "1/2"]}\nv = {c = ["1/2", "1/2"], A = [["1/2", 0], ["1/2", 0]], '
+           'b = ["1/2", "1/2"]}\n')
+
+
+@pytest.mark.parametrize("body, flags, refused", [
+    (GAUSS2, "symplectic = true\nsymmetric = true\n", None),            # [HLW] VI.4, V.2
+    (LOBATTO, "symplectic = true\nsymmetric = true\n", None),
+    (TRAPEZOID, "symmetric = true\n", None),
+    (TRAPEZOID, "symplectic = true\n", "symplectic"),                   # symmetric, not symplectic
+    (RADAU2, "symmetric = true\n", "symmetric"),
+    (KUTTA, "symplectic = true\n", "symplectic"),                       # no explicit RK is
+    ('kind = "composition"\norder = 2\nbasis = "stormer-verlet"\ngamma = ["1/3", "2/3"]\n',
+     "symmetric = true\n", "symmetric"),
+    ('kind = "composition"\norder = 1\nbasis = "euler"\ngamma = ["1/2", "1/2"]\n',
+     "symplectic = true\n", "symplectic"),
+])
+def test_declared_properties_are_checked(tmp_path, body, flags, refused):
+    """Regression: symplectic and symmetric were taken on trust (Kutta's 3/8 rule could be listed
+    as symplectic and symmetric); they are checked as the order is."""
+    path = tmp_path / "flags.toml"
+    path.write_text(f'[[method]]\nid = "flagged"\n{flags}{body}')
+    if refused is None:
+        gnibench.load(path)
+        row = gnibench.methods().set_index("id").loc["flagged"]
+        loader.unload(path)
+        for flag in ("symplectic", "symmetric"):
+            assert bool(row[flag]) == (flag in flags), flag
+        return
+    with pytest.raises(gnibench.UserError, match=f"key '{refused}': declared true, but") as err:
+        gnibench.load(path)
+    assert "[HLW]" in str(err.value)

@@ -25,6 +25,7 @@ from pathlib import Path
 
 from gnibench.methods.base import H_PARAM, NEWTON_PARAMS, Method
 from gnibench.suite.cell.user.entries import Entry
+from gnibench.suite.cell.user.properties import check_declared, tolerance
 from gnibench.suite.foundation.params import Param
 
 KINDS = ("explicit-rk", "implicit-rk", "partitioned-rk", "composition", "python", "python-solver")
@@ -234,6 +235,8 @@ def _runge_kutta(e: Entry, kind: str, info: dict, order: int) -> Method:
     exact, (a, b, c), rational = _tableau(e, e.table, "", lower=explicit)
     digits = printed_digits([e.table.get(k) for k in ("A", "b", "c")])
     _check_rk(e, exact, rational, order, "order", digits=digits)
+    check_declared(e, info, exact[:2], None, exact[2],
+                   tolerance(rational, printed_rtol(digits), [*exact[1], *sum(exact[0], [])]))
     tab = Tab(tuple(map(tuple, a)), tuple(b), tuple(c), order)
     if explicit and "b_hat" in e.table:
         bh_exact, bh, r = _numbers(e, "b_hat", e.table["b_hat"], len(b))
@@ -261,7 +264,7 @@ def _partitioned(e: Entry, info: dict, order: int) -> Method:
     from gnibench.methods import prk_conditions
     from gnibench.methods.prk import _stage_order, generate_prk
 
-    forms, kernel, rational = [], [], True
+    forms, kernel, rational, cs = [], [], True, []
     for block in ("u", "v"):
         table = e.table.get(block)
         if not isinstance(table, dict):
@@ -271,6 +274,7 @@ def _partitioned(e: Entry, info: dict, order: int) -> Method:
             raise e.error(f"{block}.{min(bad)}", "unknown key; allowed: A, b, c")
         exact, near, r = _tableau(e, table, f"{block}.", lower=False)
         forms.append((exact[0], exact[1]))
+        cs.append(exact[2])
         kernel.append((near[0], near[1]))
         rational = rational and r
         _require(e, f"{block}.c", _row_sums(exact, printed_rtol(printed_digits(table))),
@@ -286,6 +290,8 @@ def _partitioned(e: Entry, info: dict, order: int) -> Method:
                                            [float(x) for x in b]) for a, b in forms], order, rtol)
     _require(e, "order", failures,
              f"the partitioned tableau does not have the declared order {order}")
+    check_declared(e, info, forms[0], forms[1], cs[0],
+                   tolerance(rational, rtol, [x for a, b in forms for x in (*b, *sum(a, []))]))
     (au, bu), (av, bv) = kernel
     explicit = _stage_order(au, av, bu, bv, True, True) is not None
     return Method(family="partitioned-rk", generate=generate_prk(kernel[0], kernel[1]),
@@ -363,6 +369,13 @@ def _composition(e: Entry, info: dict, known, definition: dict) -> Method:
         if order > p and abs(float(sum(x ** (p + 1) for x in gammas).evalf(TOL_DIGITS))) > \
                 tol * scale:
             raise e.error("order", f"order {p + 1} needs Σγ^{p + 1} = 0 ([HLW] II.4, Thm 4.1)")
+    if info["symplectic"] and not basis.symplectic:
+        raise e.error("symplectic", f"declared true, but the basis {basis_id} is not symplectic "
+                                    f"(a composition of symplectic maps is, [HLW] VI.2)")
+    if info["symmetric"] and not symmetric:
+        raise e.error("symmetric", f"declared true, but a composition is symmetric with a "
+                                   f"symmetric basis and γ_i = γ_(s+1-i) ([HLW] V.3.1); here "
+                                   f"{'γ is not' if basis.symmetric else basis_id + ' is not'}")
     if basis.definition:
         definition["basis"] = json.loads(basis.definition)
     newton = tuple(x for x in basis.params if x.name == "newton_maxit")
@@ -372,8 +385,7 @@ def _composition(e: Entry, info: dict, known, definition: dict) -> Method:
         params=(H_PARAM,) + newton, needs=basis.needs, implicit=basis.implicit,
         explicit_when=basis.explicit_when, field_modifiers_refused=basis.field_modifiers_refused,
         data={"gamma": floats, "basis": basis_id, "forms": composed}, basis=basis,
-        **{**info, "symplectic": info["symplectic"] or basis.symplectic,
-           "symmetric": info["symmetric"] or symmetric})
+        **{**info, "symplectic": basis.symplectic, "symmetric": symmetric})
 
 
 def _list(e: Entry, key: str) -> list:
