@@ -11,12 +11,11 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+import gnibench
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
-
-import gnibench
 from gnibench.suite.cell.user import loader
+from scipy.integrate import solve_ivp
 
 S3, S6 = math.sqrt(3), math.sqrt(6)
 DEFS = r'''
@@ -220,7 +219,7 @@ def test_rhs_problem_keeps_a_user_integral_named_H():
 
     y0 = np.array([0.3, -0.2, 1.5, 0.6, 0, 0.8])
     y = rk(RADAU3, f, y0, 0.1, 20)
-    H = lambda y: (y[0] ** 2 / A + y[1] ** 2 / A + y[2] ** 2 / C) / 2 + mu * y[5]  # noqa: E731
+    H = lambda y: (y[0] ** 2 / A + y[1] ** 2 / A + y[2] ** 2 / C) / 2 + mu * y[5]
     last = traj.samples.iloc[-1]
     assert last["err_H"] == pytest.approx(H(y) - H(y0), abs=1e-13)
     assert last["err_gg"] == pytest.approx(y[3:] @ y[3:] - 1, abs=1e-13)

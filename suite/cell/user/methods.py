@@ -18,13 +18,13 @@ entry and is named. The kernels are generated as for the shipped methods.
 from __future__ import annotations
 
 import json
-import re
 from dataclasses import dataclass, replace
 from fractions import Fraction
 from pathlib import Path
 
 from gnibench.methods.base import H_PARAM, NEWTON_PARAMS, Method
 from gnibench.suite.cell.user.entries import Entry
+from gnibench.suite.cell.user.precision import _float_rk_check, printed_digits, printed_rtol
 from gnibench.suite.cell.user.properties import check_declared, tolerance
 from gnibench.suite.foundation.params import Param
 
@@ -34,72 +34,6 @@ KEYS = {"explicit-rk": ("c", "A", "b", "b_hat", "order_hat"), "implicit-rk": ("c
         "partitioned-rk": ("u", "v"), "composition": ("basis", "gamma"), "python": ("entry",),
         "python-solver": ("entry", "rtol", "atol")}
 TOL_DIGITS = 50
-PRINTED = 10          # decimals of at least this many significant digits are printed roundings
-_DECIMAL = re.compile(r"(?<![\w.])(\d*\.\d+|\d+\.?\d*)(?:[eE][+-]?\d+)?")
-
-
-def printed_digits(value) -> int:
-    """The most significant digits among the decimal numbers written in ``value`` (a number, a
-    text, or lists and tables of them): 15 for Yoshida's 0.784513610477560. A coefficient printed
-    to d >= 10 digits is a rounding of the true one, so its order conditions hold only to about
-    10^(2-d) (relative); shorter decimals (0.5, 0.125) are taken as exact."""
-    if isinstance(value, bool):
-        return 0
-    if isinstance(value, float):
-        value = repr(value)
-    if isinstance(value, (list, tuple)):
-        return max((printed_digits(v) for v in value), default=0)
-    if isinstance(value, dict):
-        return max((printed_digits(v) for v in value.values()), default=0)
-    if not isinstance(value, str):
-        return 0
-    best = 0
-    for m in _DECIMAL.finditer(value):
-        mantissa = m.group(1)
-        if "." not in mantissa and "e" not in m.group(0).lower():
-            continue                                   # an integer: exact
-        best = max(best, len(mantissa.replace(".", "").lstrip("0")))
-    return best
-
-
-def printed_rtol(digits: int) -> float | None:
-    """The relative tolerance of the order conditions for coefficients printed to ``digits``
-    significant digits (None: exact)."""
-    return max(10.0 ** (2 - digits), 1e-13) if digits >= PRINTED else None
-
-
-def _float_rk_check(a, b, c, order: int, rtol: float) -> list:
-    """Failing order conditions of an RK tableau over rooted trees in double precision: a
-    condition holds when |Σ b Φ − 1/γ| <= rtol (Σ |b| |Φ| + 1/γ), Φ of (|A|, |b|) in the scale
-    (the bound of a relative perturbation of every coefficient; as
-    :func:`gnibench.methods.prk_conditions.check` for floats)."""
-    import numpy as np
-    from gnibench.methods import order_conditions as oc
-
-    A, B = np.array([[float(x) for x in row] for row in a]), np.array([float(x) for x in b])
-    out = []
-    if c is not None:
-        for i, row in enumerate(A):
-            if abs(row.sum() - float(c[i])) > rtol * (np.abs(row).sum() + abs(float(c[i]))):
-                out.append(oc.Failure(0, "", f"Σ_j a_{i + 1}j (row {i + 1})", float(row.sum()),
-                                      c[i]))
-    phi, mag, a_phi, a_mag = {(): np.ones(len(B))}, {(): np.ones(len(B))}, {}, {}
-    for k, level in enumerate(oc.trees(order), 1):
-        for tree in level:
-            if tree:
-                vec, m = np.ones(len(B)), np.ones(len(B))
-                for child in tree:
-                    if child not in a_phi:
-                        a_phi[child], a_mag[child] = A @ phi[child], np.abs(A) @ mag[child]
-                    vec, m = vec * a_phi[child], m * a_mag[child]
-                phi[tree], mag[tree] = vec, m
-            got, want = float(B @ phi[tree]), 1.0 / oc.density(tree)
-            if abs(got - want) > rtol * (float(np.abs(B) @ mag[tree]) + want):
-                out.append(oc.Failure(k, oc.bracket(tree), oc.expression(tree), got,
-                                      Fraction(1, oc.density(tree))))
-    return out
-
-
 @dataclass(frozen=True)
 class Tab:
     """A tableau as the kernel generators read it (entries: nearest doubles, as Fractions)."""
@@ -236,7 +170,7 @@ def _runge_kutta(e: Entry, kind: str, info: dict, order: int) -> Method:
     digits = printed_digits([e.table.get(k) for k in ("A", "b", "c")])
     _check_rk(e, exact, rational, order, "order", digits=digits)
     check_declared(e, info, exact[:2], None, exact[2],
-                   tolerance(rational, printed_rtol(digits), [*exact[1], *sum(exact[0], [])]))
+                   tolerance(rational, printed_rtol(digits), [*exact[1], *(x for row in exact[0] for x in row)]))
     tab = Tab(tuple(map(tuple, a)), tuple(b), tuple(c), order)
     if explicit and "b_hat" in e.table:
         bh_exact, bh, r = _numbers(e, "b_hat", e.table["b_hat"], len(b))
@@ -291,7 +225,7 @@ def _partitioned(e: Entry, info: dict, order: int) -> Method:
     _require(e, "order", failures,
              f"the partitioned tableau does not have the declared order {order}")
     check_declared(e, info, forms[0], forms[1], cs[0],
-                   tolerance(rational, rtol, [x for a, b in forms for x in (*b, *sum(a, []))]))
+                   tolerance(rational, rtol, [x for a, b in forms for x in (*b, *(y for row in a for y in row))]))
     (au, bu), (av, bv) = kernel
     explicit = _stage_order(au, av, bu, bv, True, True) is not None
     return Method(family="partitioned-rk", generate=generate_prk(kernel[0], kernel[1]),
