@@ -126,6 +126,10 @@ def defs(tmp_path_factory):
 @pytest.fixture(autouse=True)
 def _loaded(defs):
     gnibench.load(defs / "defs.toml")           # a no-op after the first time
+    yield
+    for name in loader.loaded():                # a test's own files: ids free for the next
+        if name != str((defs / "defs.toml").resolve()):
+            loader.unload(name)
 
 
 def toda_f(y):
@@ -363,10 +367,50 @@ def test_declared_properties_are_checked(tmp_path, body, flags, refused):
     if refused is None:
         gnibench.load(path)
         row = gnibench.methods().set_index("id").loc["flagged"]
-        loader.unload(path)
         for flag in ("symplectic", "symmetric"):
             assert bool(row[flag]) == (flag in flags), flag
         return
     with pytest.raises(gnibench.UserError, match=f"key '{refused}': declared true, but") as err:
         gnibench.load(path)
     assert "[HLW]" in str(err.value)
+
+
+KEPLER = '''
+[[problem]]
+id = "kepler-user"
+states = ["q1", "q2", "p1", "p2"]
+hamiltonian = "(p1^2 + p2^2)/2 - 1/sqrt(q1^2 + q2^2)"
+integrals = {L = "q1*p2 - q2*p1"}
+parameters = {e = 0.6}
+initial = {q1 = "1 - e", q2 = 0, p1 = 0, p2 = "sqrt((1 + e)/(1 - e))"}
+period = "2*pi*(-2*((p10^2 + p20^2)/2 - 1/sqrt(q10^2 + q20^2)))^(-3/2)"
+'''
+
+
+def test_a_user_kepler_problem_gives_the_shipped_eta(tmp_path):
+    """The plane Kepler problem written by the user (period from the initial energy, [B] §5.2)
+    gives the η(nT) of the shipped kepler-2d to round-off, at another eccentricity too."""
+    (tmp_path / "kepler.toml").write_text(KEPLER)
+    gnibench.load(tmp_path / "kepler.toml")
+    T = 2 * math.pi
+    for e in (0.6, 0.3):
+        user, shipped = (gnibench.solve(f"{p}:e={e}", "gauss4:h=0.05", t_end=5 * T, every=20,
+                                        metrics="eta") for p in ("kepler-user", "kepler-2d"))
+        assert user.metrics["eta_period"] == pytest.approx(T, rel=1e-13)
+        assert user.metrics["eta_final"] == pytest.approx(shipped.metrics["eta_final"], rel=1e-6)
+        assert user.metrics["eta_final"] > 1e-9
+
+
+def test_options_where_an_initial_value_or_the_period_fails(tmp_path):
+    """Regression: an option making an initial expression complex or infinite (e >= 1 here) was
+    a TypeError traceback; a period that is not real (an unbound orbit) refused every cell, also
+    those that never use it: now η alone refuses it, the orbit is integrated."""
+    (tmp_path / "kepler.toml").write_text(KEPLER)
+    gnibench.load(tmp_path / "kepler.toml")
+    for e, says in ((1.5, "the initial value p2 = .* is 0\\+2.23607j"), (1, "not a number")):
+        with pytest.raises(gnibench.UserError, match=says):
+            gnibench.solve(f"kepler-user:e={e}", "gauss4:h=0.05", steps=2)
+    unbound = gnibench.solve("kepler-user:p20=5", "gauss4:h=0.05", t_end=1.0)
+    assert unbound.status == "ok" and unbound.samples["q2"].iloc[-1] > 4      # flies off
+    with pytest.raises(gnibench.UserError, match="its period .* \\(not real\\)"):
+        gnibench.solve("kepler-user:p20=5", "gauss4:h=0.05", t_end=1.0, metrics="eta")

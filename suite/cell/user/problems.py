@@ -19,6 +19,7 @@ text).
 """
 from __future__ import annotations
 
+import cmath
 import json
 import keyword
 import math
@@ -104,9 +105,11 @@ def build_problem(e: Entry, origin) -> Problem:
                                                                         f"({e.source})"),
         state=tuple(states),
         params=tuple(Param(n, v, "parameter (user definition)") for n, v in values.items()),
-        model=model, initial=_numbers(init, list(params)), canonical=canonical,
+        model=model, initial=_numbers(init, list(params), states, pid), canonical=canonical,
         partition=partition, exact=None if exact is None else _exact(exact, list(params), states),
         period=None if period is None else _period(period, list(params), states, init, pid),
+        time_scale=None if period is None else _time_scale(_period(period, list(params), states,
+                                                                   init, pid)),
         notes=e.text("notes", "", one_line=False), origin=origin,
         definition=json.dumps({"source": e.source, "entry": e.table}, sort_keys=True, default=str))
 
@@ -138,15 +141,31 @@ def _model(states, params, hamiltonian, rhs, integrals):
     return model
 
 
-def _numbers(exprs, params):
+def _numbers(exprs, params, states=(), pid: str = "?"):
+    """``initial(values)``: the initial point at these parameter values; a UserError naming the
+    state when an expression is not a finite real number there (sqrt of a negative, 1/0)."""
+    from gnibench.suite.foundation.errors import UserError
+
     def initial(values):
         subs = {n: values[n] for n in params}
-        return tuple(float(x.subs({s: subs[s.name] for s in x.free_symbols})) for x in exprs)
+        out = []
+        for k, x in enumerate(exprs):
+            try:
+                v = complex(x.subs({s: subs[s.name] for s in x.free_symbols}).evalf(20))
+            except (TypeError, ValueError, ZeroDivisionError, OverflowError):
+                v = complex("nan")
+            if v.imag != 0 or not math.isfinite(v.real):
+                name = states[k] if k < len(states) else str(k)
+                shown = "not a number" if cmath.isnan(v) else f"{v:g}"
+                raise UserError(f"problem {pid}: the initial value {name} = {x} is {shown} for "
+                                f"these options; allowed: options where it is a finite real number")
+            out.append(v.real)
+        return tuple(out)
     return initial
 
 
 def _y0(values, states, init, params):
-    base = _numbers(init, params)(values)
+    base = _numbers(init, params, states)(values)
     return [values.get(f"{s}0") if values.get(f"{s}0") is not None else b
             for s, b in zip(states, base)]
 
@@ -162,10 +181,25 @@ def _period(expr, params, states, init, pid: str = "?"):
         except (TypeError, ValueError, ZeroDivisionError, OverflowError):
             value = complex("nan")
         if value.imag != 0 or not 0 < value.real < math.inf:
-            raise UserError(f"problem {pid}: its period {expr} is {value.real:g} for these "
+            shown = f"{value.real:g}" if value.imag == 0 else f"{value:g} (not real)"
+            raise UserError(f"problem {pid}: its period {expr} is {shown} for these "
                             f"options; allowed: options where it is a finite number > 0")
         return value.real
     return period
+
+
+def _time_scale(period):
+    """The characteristic time of the defaults (as ``Problem.time_scale_of`` makes it from a
+    period: T/2π to 2 digits), 1 where the period is not a finite number > 0 at these values
+    (an unbound orbit can be integrated; only η needs its period, and refuses it)."""
+    from gnibench.suite.foundation.errors import UserError
+
+    def time_scale(values):
+        try:
+            return float(f"{period(values) / (2 * math.pi):.2g}")
+        except UserError:
+            return 1.0
+    return time_scale
 
 
 def _exact(exprs, params, states):
