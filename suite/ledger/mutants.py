@@ -80,9 +80,9 @@ def load_catalog(text: str | None = None) -> tuple[list[Mutant], dict]:
 
 
 def package_root() -> Path:
-    import gnibench
-
-    return Path(gnibench.__file__).resolve().parent
+    """The package this module belongs to (suite/ledger/ two levels down): importing the
+    package top would import the API, a floor above the ledger (tests/test_layout.py)."""
+    return Path(__file__).resolve().parents[2]
 
 
 def check(mutant: Mutant, root: Path | None = None) -> str:
