@@ -134,7 +134,10 @@ def generate_prk(u: tuple, v: tuple | None = None):
 
 
 def _renamed(source: str) -> str:
-    return re.sub(r"\bmake_ws\(", "basis_make_ws(", re.sub(r"\bstep\(", "basis_step(", source))
+    """The basis's ``step``/``make_ws`` as ``basis_step``/``basis_make_ws``, and a basis that is
+    itself a composition one level deeper (``basis_step`` -> ``basis_basis_step``), so that
+    compositions nest without two functions of one name."""
+    return re.sub(r"\b((?:basis_)*)(step|make_ws)\(", r"basis_\1\2(", source)
 
 
 def generate_composition(basis: Method, gammas):

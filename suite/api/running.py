@@ -56,12 +56,13 @@ def run(experiment, *, output=None, jobs: int | None = None, executor: str = "lo
     ``jobs``, ``executor`` (``local`` or ``dask``), ``scheduler``, ``fresh``, ``scale``: as on
     the command line."""
     from gnibench.reports.markdown import render_summary
-    from gnibench.suite.cell.user.loader import discover
+    from gnibench.suite.cell.user.loader import discover, refresh
     from gnibench.suite.runs import executors
     from gnibench.suite.runs.experiment import load_experiment, parse_experiment
     from gnibench.suite.runs.runner import run_experiments
 
     discover()                      # GNIBENCH_LOAD and entry points, as `gnibench run`
+    refresh()                       # definitions edited since they were loaded
     if isinstance(experiment, dict):        # its `load` paths are relative to the working dir
         exp = parse_experiment(toml_text(experiment), "experiment dict", scale, Path.cwd())
     elif isinstance(experiment, (str, Path)):

@@ -44,10 +44,11 @@ def solve(problem, method, *, t_end: float | None = None, steps: int | None = No
     ``metrics`` (a list of metric specs, or one comma-separated string) as the options of the
     command line. Bad input raises :class:`gnibench.UserError`; a diverging integration is a
     status (``.status``, ``.reason``), not an exception."""
-    from gnibench.suite.cell.user.loader import discover
+    from gnibench.suite.cell.user.loader import discover, refresh
     from gnibench.suite.runs.solving import json_meta, solve_cell_spec, solve_output
 
     discover()                      # GNIBENCH_LOAD and entry points, as `gnibench solve`
+    refresh()                       # definitions edited since they were loaded
     out = solve_output(solve_cell_spec(problem, method, steps=steps, t_end=t_end, every=every,
                                        dt_out=dt_out, section=section, reference=reference,
                                        metrics=metrics))

@@ -78,10 +78,12 @@ _cells: dict[tuple[str, str], CompiledCell] = {}
 
 def compile_cell(problem: Bound, method) -> CompiledCell:
     """Load the cell's kernels and build ``par``. A cell loaded once in this process is kept (keyed
-    by its canonical specs, which fix its module text and ``par``): a worker that runs many cells of
+    by its canonical specs, which fix its module text and ``par``, and by the definitions of user
+records, which an edited file changes under the same specs): a worker that runs many cells of
     one kernel loads it once; ``warm`` lists its drivers already run once. ``compile_seconds`` is
     what this call took."""
-    key = (problem.text(), method.text())
+    key = (problem.text(), method.text(), getattr(problem.record, "definition", None),
+           getattr(getattr(method, "base", method).record, "definition", None))
     t0 = time.perf_counter()
     if key not in _cells:
         _cells[key] = _compile(problem, method)

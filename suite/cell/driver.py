@@ -247,11 +247,10 @@ def _external(problem: Bound, method, sg: SampleGrid) -> Trajectory:
     pk = problem_kernel(problem)
     run = method.base.record.run(problem, method.base.values, sg, pk)
     t = sg.t[:len(run.y)]
+    njev = np.zeros(len(t)) if run.njev is None else np.asarray(run.njev, dtype=np.float64)
     counters = np.column_stack([np.asarray(run.steps, dtype=np.float64),
                                 np.asarray(run.nfev, dtype=np.float64),
-                                np.zeros(len(t)) if run.njev is None
-                                else np.asarray(run.njev, dtype=np.float64),
-                                np.zeros(len(t))]) if len(t) else np.zeros((0, 4))
+                                njev, np.zeros(len(t))]) if len(t) else np.zeros((0, 4))
     prov = {"versions": versions(), "h": sg.h, "nsteps": sg.nsteps, "h_last": sg.h_last,
             "every": sg.every, "seed": None, "y0": list(y0), "H0": list(pk.at(y0)),
             "grid_param": method.base.record.grid_param, "engine": run.info,

@@ -43,15 +43,22 @@ def lookup(kind: str, id: str) -> Any:
     return None if fn is None else fn(id)
 
 
-def resolve(lookup_fn: Callable[[str], Any], kind: str, id: str, origin: Any = None) -> Any:
-    """The record of a pickled reference (see the module docstring)."""
+def resolve(lookup_fn: Callable[[str], Any], kind: str, id: str, origin: Any = None,
+            definition: str | None = None) -> Any:
+    """The record of a pickled reference (see the module docstring). ``definition``: the
+    sender's text of a user definition; a record of this process defined otherwise (a worker
+    that kept an earlier version of an edited file) is defined again from ``origin``."""
     record = lookup_fn(id)
-    if record is None and origin is not None:
+    if origin is not None and (record is None or (
+            definition is not None and getattr(record, "definition", None) != definition)):
         origin.load()
         record = lookup_fn(id)
     if record is None:
         where = f" (defined in {origin})" if origin is not None else ""
         raise LookupError(f"no {kind} {id!r} in this process{where}; load its definitions first")
+    if definition is not None and getattr(record, "definition", None) != definition:
+        raise LookupError(f"the {kind} {id!r} of {origin} is defined differently in this process "
+                          f"(its file or module changed during the run)")
     return record
 
 
@@ -74,5 +81,8 @@ class Registered:
         fn = _LOOKUPS.get(self.registry)
         origin = getattr(self, "origin", None)
         if fn is not None and (fn(self.id) is self or origin is not None):
-            return (resolve, (fn, self.registry, self.id, origin))
+            if origin is None:
+                return (resolve, (fn, self.registry, self.id, origin))
+            return (resolve, (fn, self.registry, self.id, origin,
+                              getattr(self, "definition", None)))
         return (_by_value, (type(self), dict(self.__dict__)))

@@ -80,8 +80,8 @@ def load_catalog(text: str | None = None) -> tuple[list[Mutant], dict]:
 
 
 def package_root() -> Path:
-    """The installed package's directory (this file is <root>/suite/ledger/mutants.py; importing
-    the package top from here would make an import cycle through the API)."""
+    """The package this module belongs to (suite/ledger/ two levels down): importing the
+    package top would import the API, a floor above the ledger (tests/test_layout.py)."""
     return Path(__file__).resolve().parents[2]
 
 

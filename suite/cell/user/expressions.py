@@ -12,6 +12,7 @@ rational it writes (``0.1`` is 1/10), so coefficients stay exact.
 from __future__ import annotations
 
 import ast
+import math
 
 FUNCTIONS = ("sqrt", "cbrt", "exp", "log", "sin", "cos", "tan", "asin", "acos", "atan", "atan2",
              "sinh", "cosh", "tanh", "asinh", "acosh", "atanh", "Abs", "abs", "sign")
@@ -19,6 +20,8 @@ CONSTANTS = ("pi", "E")
 MAX_LENGTH = 20000
 MAX_DEPTH = 200
 MAX_EXPONENT = 1000          # |numeric exponent|: 10^(10^9) would never finish
+MAX_MAGNITUDE = 1e300        # |a constant part|: exp(exp(exp(100))) would never finish either
+MAX_DIGITS = 10000           # digits of an exact rational part: ((1+10^-99)^1000)^1000 neither
 
 
 class ExpressionError(ValueError):
@@ -34,6 +37,8 @@ def parse(text, names: dict | None = None):
     names = names or {}
     if isinstance(text, bool) or not isinstance(text, (str, int, float)):
         raise ExpressionError(f"{text!r} is not an expression (a number or a text)")
+    if isinstance(text, float) and not math.isfinite(text):
+        raise ExpressionError(f"{text!r} is not a finite number; allowed: numbers within ±1e300")
     if not isinstance(text, str):
         return sp.Integer(text) if isinstance(text, int) else sp.Rational(repr(float(text)))
     if len(text) > MAX_LENGTH:
@@ -65,6 +70,38 @@ class _Builder:
                               f"{', '.join(sorted(self.names)) or '(none)'}, {', '.join(CONSTANTS)}, "
                               f"+ - * / ^ and the functions {', '.join(FUNCTIONS)}")
 
+    def bounded(self, node, value):
+        """``value`` if it has free names or is a moderate number: a constant part beyond
+        ±1e300 (or not finite, or an exact rational of more than 10^4 digits) is refused, so
+        that nesting (exp(exp(exp(100))), powers of powers) cannot make the next step of the
+        parse or evaluation run without end."""
+        if value.free_symbols or not value.is_number:
+            return value
+        if isinstance(value, self.sp.Rational):
+            if max(len(str(abs(value.p))), len(str(value.q))) > MAX_DIGITS:
+                self.refuse(node, f"a number of more than {MAX_DIGITS} digits")
+            if abs(value.p) > 10 ** 300 * value.q:
+                self.refuse(node, f"a number beyond ±{MAX_MAGNITUDE:g}")
+            return value
+        try:
+            v = complex(value.evalf(15))
+        except (TypeError, ValueError, OverflowError):
+            v = complex("nan")
+        if not (abs(v) <= MAX_MAGNITUDE):            # also NaN
+            self.refuse(node, f"a number beyond ±{MAX_MAGNITUDE:g} (or not finite)")
+        return value
+
+    def chain(self, node, depth: int) -> list:
+        """The terms of a sum a + b - c + ... (a left-nested chain of + and -), each built one
+        level down: a Hamiltonian of many terms is long, not deep."""
+        terms = []
+        while isinstance(node, ast.BinOp) and isinstance(node.op, (ast.Add, ast.Sub)):
+            term = self.build(node.right, depth + 1)
+            terms.append(-term if isinstance(node.op, ast.Sub) else term)
+            node = node.left
+        terms.append(self.build(node, depth + 1))
+        return terms[::-1]
+
     def build(self, node, depth: int):
         sp = self.sp
         if depth > MAX_DEPTH:
@@ -78,7 +115,7 @@ class _Builder:
                     self.refuse(node, "an integer of more than 100 digits")
                 return sp.Integer(v)
             segment = ast.get_source_segment(self.text, node) or repr(v)
-            return sp.Rational(segment.replace("_", ""))
+            return self.bounded(node, sp.Rational(segment.replace("_", "")))
         if isinstance(node, ast.Name):
             if node.id in self.names:
                 return self.names[node.id]
@@ -90,23 +127,24 @@ class _Builder:
         if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.UAdd, ast.USub)):
             x = self.build(node.operand, depth + 1)
             return -x if isinstance(node.op, ast.USub) else x
+        if isinstance(node, ast.BinOp) and isinstance(node.op, (ast.Add, ast.Sub)):
+            return self.bounded(node, sp.Add(*self.chain(node, depth)))
         if isinstance(node, ast.BinOp):
             a, b = self.build(node.left, depth + 1), self.build(node.right, depth + 1)
             op = node.op
-            if isinstance(op, ast.Add):
-                return a + b
-            if isinstance(op, ast.Sub):
-                return a - b
             if isinstance(op, ast.Mult):
-                return a * b
+                return self.bounded(node, a * b)
             if isinstance(op, ast.Div):
                 if b == 0:
                     self.refuse(node, "a division by zero")
-                return a / b
+                return self.bounded(node, a / b)
             if isinstance(op, ast.Pow):
                 if b.is_number and (not b.is_finite or abs(complex(b)) > MAX_EXPONENT):
                     self.refuse(node, f"an exponent beyond ±{MAX_EXPONENT}")
-                return a ** b
+                if isinstance(a, sp.Rational) and isinstance(b, sp.Rational) and \
+                        abs(b) * max(len(str(abs(a.p))), len(str(a.q))) > MAX_DIGITS:
+                    self.refuse(node, f"a power of more than {MAX_DIGITS} digits")
+                return self.bounded(node, a ** b)
             self.refuse(node, f"the operator {type(op).__name__}")
         if isinstance(node, ast.Call):
             fn = node.func
@@ -118,7 +156,7 @@ class _Builder:
             want = 2 if fn.id == "atan2" else 1
             if len(args) != want:
                 self.refuse(node, f"{fn.id} with {len(args)} arguments (it takes {want})")
-            return self.functions[fn.id](*args)
+            return self.bounded(node, self.functions[fn.id](*args))
         if isinstance(node, ast.Attribute):
             self.refuse(node, "attribute access")
         self.refuse(node, f"the syntax {type(node).__name__}")

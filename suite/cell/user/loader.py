@@ -104,10 +104,45 @@ def unload(name: str | Path | None = None) -> None:
             (REGISTRY if kind == "problem" else METHODS).pop(rid, None)
 
 
+def refresh() -> None:
+    """Load again every definitions file loaded in this process whose text on disk, or whose
+    Python integrators' module source, has changed since (the API calls this before each
+    ``solve`` and ``run``: a notebook sees its edited definitions, as a new command would)."""
+    for name in [n for n, (digest, _) in _LOADED.items() if digest]:
+        try:
+            text = Path(name).read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError):
+            continue                                 # gone or unreadable: keep what was loaded
+        if hashlib.sha256(text.encode()).hexdigest() != _LOADED[name][0] or _stale(name):
+            load(name)
+
+
+def _stale(name: str) -> bool:
+    """Whether a Python integrator of the origin ``name`` was built from a module source that
+    has changed since."""
+    import json
+
+    from gnibench.methods import METHODS
+    from gnibench.suite.cell.user.python_methods import entry_code
+
+    for kind, rid in _LOADED.get(name, ("", []))[1]:
+        record = METHODS.get(rid) if kind == "method" else None
+        if record is None or getattr(record, "kind", "") != "python":
+            continue
+        code = json.loads(record.definition or "{}").get("code")
+        base = str(Path(name).parent)
+        try:
+            if entry_code(record.entry, base)[1] != code:
+                return True
+        except Exception:  # noqa: BLE001 - the module is broken now: build again, and say so
+            return True
+    return False
+
+
 def _load_text(origin: Origin, text: str) -> list[str]:
     digest = hashlib.sha256(text.encode()).hexdigest()
     if origin.name in _LOADED:
-        if _LOADED[origin.name][0] == digest:
+        if _LOADED[origin.name][0] == digest and not _stale(origin.name):
             return [rid for _, rid in _LOADED[origin.name][1]]
         unload(origin.name)                          # the file changed: its new definitions
     try:

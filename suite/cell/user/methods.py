@@ -17,8 +17,6 @@ entry and is named. The kernels are generated as for the shipped methods.
 """
 from __future__ import annotations
 
-import hashlib
-import inspect
 import json
 from dataclasses import dataclass, replace
 from fractions import Fraction
@@ -26,6 +24,8 @@ from pathlib import Path
 
 from gnibench.methods.base import H_PARAM, NEWTON_PARAMS, Method
 from gnibench.suite.cell.user.entries import Entry
+from gnibench.suite.cell.user.precision import _float_rk_check, printed_digits, printed_rtol
+from gnibench.suite.cell.user.properties import check_declared, tolerance
 from gnibench.suite.foundation.params import Param
 
 KINDS = ("explicit-rk", "implicit-rk", "partitioned-rk", "composition", "python", "python-solver")
@@ -34,8 +34,6 @@ KEYS = {"explicit-rk": ("c", "A", "b", "b_hat", "order_hat"), "implicit-rk": ("c
         "partitioned-rk": ("u", "v"), "composition": ("basis", "gamma"), "python": ("entry",),
         "python-solver": ("entry", "rtol", "atol")}
 TOL_DIGITS = 50
-
-
 @dataclass(frozen=True)
 class Tab:
     """A tableau as the kernel generators read it (entries: nearest doubles, as Fractions)."""
@@ -142,12 +140,17 @@ def _require(e: Entry, key: str, failures: list, what: str) -> None:
         raise e.error(key, f"{what}: {failures[0]}{more}")
 
 
-def _check_rk(e: Entry, exact, rational: bool, order: int, key: str, c=True) -> None:
+def _check_rk(e: Entry, exact, rational: bool, order: int, key: str, c=True,
+              digits: int = 0) -> None:
     from gnibench.methods.order_conditions import check
 
     a, b, cc = exact
     tol = 0 if rational else Fraction(1, 10 ** 40)
-    failures = check(a, b, cc if c else None, order, tol)
+    rtol = printed_rtol(digits)
+    if rtol is None:
+        failures = check(a, b, cc if c else None, order, tol)
+    else:                               # printed decimals: to their precision, in doubles
+        failures = _float_rk_check(a, b, cc if c else None, order, rtol)
     if failures and failures[0].order == 0:                     # a row of A does not sum to c
         _require(e, "c", failures, "the rows of A must sum to c")
     _require(e, key, failures, f"the tableau does not have the declared {key.replace('_', ' ')} "
@@ -164,13 +167,16 @@ def _runge_kutta(e: Entry, kind: str, info: dict, order: int) -> Method:
 
     explicit = kind == "explicit-rk"
     exact, (a, b, c), rational = _tableau(e, e.table, "", lower=explicit)
-    _check_rk(e, exact, rational, order, "order")
+    digits = printed_digits([e.table.get(k) for k in ("A", "b", "c")])
+    _check_rk(e, exact, rational, order, "order", digits=digits)
+    check_declared(e, info, exact[:2], None, exact[2],
+                   tolerance(rational, printed_rtol(digits), [*exact[1], *(x for row in exact[0] for x in row)]))
     tab = Tab(tuple(map(tuple, a)), tuple(b), tuple(c), order)
     if explicit and "b_hat" in e.table:
         bh_exact, bh, r = _numbers(e, "b_hat", e.table["b_hat"], len(b))
         order_hat = e.integer("order_hat", 1, 12)
         _check_rk(e, (exact[0], bh_exact, exact[2]), rational and r, order_hat, "order_hat",
-                  c=False)
+                  c=False, digits=max(digits, printed_digits(e.table["b_hat"])))
         pair = embedded_rk.Pair(tab=tab, e=tuple(x - y for x, y in zip(b, bh)),
                                 iord=max(order, order_hat), expo=1.0 / (min(order, order_hat) + 1))
         method = embedded_rk.embedded(info["id"], pair, order, info["reference"], info["doc"])
@@ -192,7 +198,7 @@ def _partitioned(e: Entry, info: dict, order: int) -> Method:
     from gnibench.methods import prk_conditions
     from gnibench.methods.prk import _stage_order, generate_prk
 
-    forms, kernel, rational = [], [], True
+    forms, kernel, rational, cs = [], [], True, []
     for block in ("u", "v"):
         table = e.table.get(block)
         if not isinstance(table, dict):
@@ -202,14 +208,24 @@ def _partitioned(e: Entry, info: dict, order: int) -> Method:
             raise e.error(f"{block}.{min(bad)}", "unknown key; allowed: A, b, c")
         exact, near, r = _tableau(e, table, f"{block}.", lower=False)
         forms.append((exact[0], exact[1]))
+        cs.append(exact[2])
         kernel.append((near[0], near[1]))
         rational = rational and r
-        _require(e, f"{block}.c", _row_sums(exact), "the rows of A do not sum to c")
+        _require(e, f"{block}.c", _row_sums(exact, printed_rtol(printed_digits(table))),
+                 "the rows of A do not sum to c")
     if len(forms[0][1]) != len(forms[1][1]):
         raise e.error("v", "the two tableaus need the same number of stages")
-    _require(e, "order", prk_conditions.check(forms[0], forms[1], order, None,
-                                              0 if rational else Fraction(1, 10 ** 40)),
+    rtol = printed_rtol(printed_digits([e.table.get("u"), e.table.get("v")]))
+    if rtol is None:
+        failures = prk_conditions.check(forms[0], forms[1], order, None,
+                                        0 if rational else Fraction(1, 10 ** 40))
+    else:                               # printed decimals: to their precision, in doubles
+        failures = prk_conditions.check(*[([[float(x) for x in row] for row in a],
+                                           [float(x) for x in b]) for a, b in forms], order, rtol)
+    _require(e, "order", failures,
              f"the partitioned tableau does not have the declared order {order}")
+    check_declared(e, info, forms[0], forms[1], cs[0],
+                   tolerance(rational, rtol, [x for a, b in forms for x in (*b, *(y for row in a for y in row))]))
     (au, bu), (av, bv) = kernel
     explicit = _stage_order(au, av, bu, bv, True, True) is not None
     return Method(family="partitioned-rk", generate=generate_prk(kernel[0], kernel[1]),
@@ -218,10 +234,15 @@ def _partitioned(e: Entry, info: dict, order: int) -> Method:
                   params=(H_PARAM,) + NEWTON_PARAMS, **info)
 
 
-def _row_sums(exact) -> list[str]:
+def _row_sums(exact, rtol: float | None = None) -> list[str]:
     a, _, c = exact
+
+    def off(row, ci) -> bool:
+        if rtol is None:
+            return abs(sum(row) - ci) > Fraction(1, 10 ** 40)
+        return abs(float(sum(row) - ci)) > rtol * float(sum(abs(x) for x in row) + abs(ci))
     return [f"row {i + 1}: Σ_j a_{i + 1}j = {sum(row)} ≠ c_{i + 1} = {c[i]}" for i, row in
-            enumerate(a) if abs(sum(row) - c[i]) > Fraction(1, 10 ** 40)]
+            enumerate(a) if off(row, c[i])]
 
 
 def forms_of(method: Method):
@@ -261,24 +282,34 @@ def _composition(e: Entry, info: dict, known, definition: dict) -> Method:
     symmetric = basis.symmetric and all(sp.simplify(x - y) == 0
                                         for x, y in zip(gammas, reversed(gammas)))
     composed = None
+    rtol = printed_rtol(printed_digits(e.table.get("gamma")))
     if forms is not None:
-        g = [Fraction(int(x.p), int(x.q)) for x in gammas] if rational else \
+        g = [Fraction(int(x.p), int(x.q)) for x in gammas] if rational and rtol is None else \
             [float(x.evalf(30)) for x in gammas]
         composed = compose(forms, g)
-        exact = rational and basis.id in PRK_FORMS and basis.origin is None   # known rational
+        exact = rational and rtol is None and basis.id in PRK_FORMS and basis.origin is None
         _require(e, "order", prk_conditions.check(composed[0], composed[1], order,
-                                                  None if exact else 1e-10),
+                                                  None if exact else rtol or 1e-10),
                  f"the composition does not have the declared order {order}")
     else:
         top = p + 2 if symmetric else p + 1
         if order > top:
             raise e.error("order", f"{basis_id} has no tableau, so only the conditions of [HLW] "
                                    f"II.4 apply: at most order {top} from a basis of order {p}")
-        total = sum(gammas)
-        if abs(float((total - 1).evalf(TOL_DIGITS))) > 1e-30:
+        total, tol = sum(gammas), max(rtol or 0, 1e-30)
+        if abs(float((total - 1).evalf(TOL_DIGITS))) > tol:
             raise e.error("gamma", f"Σγ = {float(total.evalf(20))!r} ≠ 1 (consistency)")
-        if order > p and abs(float(sum(x ** (p + 1) for x in gammas).evalf(TOL_DIGITS))) > 1e-30:
+        scale = float(sum(abs(x) ** (p + 1) for x in gammas).evalf(TOL_DIGITS))
+        if order > p and abs(float(sum(x ** (p + 1) for x in gammas).evalf(TOL_DIGITS))) > \
+                tol * scale:
             raise e.error("order", f"order {p + 1} needs Σγ^{p + 1} = 0 ([HLW] II.4, Thm 4.1)")
+    if info["symplectic"] and not basis.symplectic:
+        raise e.error("symplectic", f"declared true, but the basis {basis_id} is not symplectic "
+                                    f"(a composition of symplectic maps is, [HLW] VI.2)")
+    if info["symmetric"] and not symmetric:
+        raise e.error("symmetric", f"declared true, but a composition is symmetric with a "
+                                   f"symmetric basis and γ_i = γ_(s+1-i) ([HLW] V.3.1); here "
+                                   f"{'γ is not' if basis.symmetric else basis_id + ' is not'}")
     if basis.definition:
         definition["basis"] = json.loads(basis.definition)
     newton = tuple(x for x in basis.params if x.name == "newton_maxit")
@@ -288,8 +319,7 @@ def _composition(e: Entry, info: dict, known, definition: dict) -> Method:
         params=(H_PARAM,) + newton, needs=basis.needs, implicit=basis.implicit,
         explicit_when=basis.explicit_when, field_modifiers_refused=basis.field_modifiers_refused,
         data={"gamma": floats, "basis": basis_id, "forms": composed}, basis=basis,
-        **{**info, "symplectic": info["symplectic"] or basis.symplectic,
-           "symmetric": info["symmetric"] or symmetric})
+        **{**info, "symplectic": basis.symplectic, "symmetric": symmetric})
 
 
 def _list(e: Entry, key: str) -> list:
@@ -301,22 +331,18 @@ def _list(e: Entry, key: str) -> list:
 
 def _python(e: Entry, kind: str, info: dict, definition: dict) -> Method:
     from gnibench.methods.external import DT_OUT
-    from gnibench.suite.cell.user.python_methods import PythonMethod, resolve_entry, solver, stepper
+    from gnibench.suite.cell.user.python_methods import PythonMethod, entry_code, solver, stepper
 
     entry = e.text("entry")
     base = str(Path(e.source).resolve().parent) if Path(e.source).is_file() else ""
     try:
-        fn = resolve_entry(entry, base)
+        _, code = entry_code(entry, base)
     except Exception as ex:  # noqa: BLE001 - any failure to import the user's code
         raise e.error("entry", f"cannot load {entry!r}: {type(ex).__name__}: {ex}") from None
-    try:
-        definition["code"] = hashlib.sha256(inspect.getsource(inspect.getmodule(fn)).encode()
-                                            ).hexdigest()
-    except (OSError, TypeError):
-        definition["code"] = getattr(fn, "__qualname__", entry)
+    definition["code"] = code                   # the module's source: part of a cell's key
     if kind == "python":
         return PythonMethod(family="python", generate=_not_compiled, params=(H_PARAM,),
-                            run=stepper(entry, base), kind="python", engine="python",
+                            run=stepper(entry, base, code), kind="python", engine="python",
                             entry=entry, **info)
     tols = []
     for name in ("rtol", "atol"):
@@ -326,7 +352,7 @@ def _python(e: Entry, kind: str, info: dict, definition: dict) -> Method:
         tols.append(Param(name, float(default), f"{name[0]}-tolerance passed to the solver",
                           low=0.0, low_open=True))
     return PythonMethod(family="python", generate=_not_compiled, params=(DT_OUT, *tols),
-                        run=solver(entry, base), kind="python", engine="python", adaptive=True,
+                        run=solver(entry, base, code), kind="python", engine="python", adaptive=True,
                         grid_param="dt_out", entry=entry, **info)
 
 

@@ -19,7 +19,10 @@ text).
 """
 from __future__ import annotations
 
+import cmath
 import json
+import keyword
+import math
 
 from gnibench.problems.base import Model, Problem
 from gnibench.suite.cell.user.entries import Entry
@@ -40,10 +43,10 @@ def build_problem(e: Entry, origin) -> Problem:
     states = e.names("states")
     params = e.table_of("parameters")
     for name in list(states) + list(params):
-        if name in RESERVED:
+        if name in RESERVED or keyword.iskeyword(name):
             raise e.error("states" if name in states else "parameters",
-                          f"the name {name!r} is reserved (t, {', '.join(CONSTANTS)} and the "
-                          f"functions)")
+                          f"the name {name!r} is reserved (t, {', '.join(CONSTANTS)}, the "
+                          f"functions and Python's keywords)")
     for name in params:
         if name in states or name in {f"{s}0" for s in states}:
             raise e.error("parameters", f"the parameter {name!r} clashes with a state or an "
@@ -71,11 +74,14 @@ def build_problem(e: Entry, origin) -> Problem:
             e.expr(f"rhs.{s}", text, syms)
         texts = {}
         partition = _partition(e, states)
+    integrals = {}
     for name, text in e.table_of("integrals").items():
         if name in texts:
             raise e.error(f"integrals.{name}", "H is the Hamiltonian's own integral (added "
                                                "already)")
-        e.expr(f"integrals.{name}", text, syms)
+        if keyword.iskeyword(name):
+            raise e.error("integrals", f"the name {name!r} is reserved (Python's keywords)")
+        integrals[name] = e.expr(f"integrals.{name}", text, syms)
         texts[name] = text
     initial = e.table_of("initial", required=True)
     if sorted(initial) != sorted(states):
@@ -91,16 +97,19 @@ def build_problem(e: Entry, origin) -> Problem:
             raise e.error("exact", f"needs an expression for every state ({', '.join(states)})")
         tsym = sp.Symbol("t", real=True)
         exact = [e.expr(f"exact.{s}", table[s], {**with_y0, "t": tsym}) for s in states]
+    check_definition(e, states, syms, params, values, init, integrals, period, exact)
     model = _model(states, list(params), e.table.get("hamiltonian"),
-                   e.table.get("rhs"), {k: v for k, v in texts.items() if k != "H"})
+                   e.table.get("rhs"), {k: e.table_of("integrals")[k] for k in integrals})
     return Problem(
         id=pid, title=e.text("title", pid), reference=e.text("reference", f"user definition "
                                                                         f"({e.source})"),
         state=tuple(states),
         params=tuple(Param(n, v, "parameter (user definition)") for n, v in values.items()),
-        model=model, initial=_numbers(init, list(params)), canonical=canonical,
+        model=model, initial=_numbers(init, list(params), states, pid), canonical=canonical,
         partition=partition, exact=None if exact is None else _exact(exact, list(params), states),
-        period=None if period is None else _period(period, list(params), states, init),
+        period=None if period is None else _period(period, list(params), states, init, pid),
+        time_scale=None if period is None else _time_scale(_period(period, list(params), states,
+                                                                   init, pid)),
         notes=e.text("notes", "", one_line=False), origin=origin,
         definition=json.dumps({"source": e.source, "entry": e.table}, sort_keys=True, default=str))
 
@@ -132,25 +141,65 @@ def _model(states, params, hamiltonian, rhs, integrals):
     return model
 
 
-def _numbers(exprs, params):
+def _numbers(exprs, params, states=(), pid: str = "?"):
+    """``initial(values)``: the initial point at these parameter values; a UserError naming the
+    state when an expression is not a finite real number there (sqrt of a negative, 1/0)."""
+    from gnibench.suite.foundation.errors import UserError
+
     def initial(values):
         subs = {n: values[n] for n in params}
-        return tuple(float(x.subs({s: subs[s.name] for s in x.free_symbols})) for x in exprs)
+        out = []
+        for k, x in enumerate(exprs):
+            try:
+                v = complex(x.subs({s: subs[s.name] for s in x.free_symbols}).evalf(20))
+            except (TypeError, ValueError, ZeroDivisionError, OverflowError):
+                v = complex("nan")
+            if v.imag != 0 or not math.isfinite(v.real):
+                name = states[k] if k < len(states) else str(k)
+                shown = "not a number" if cmath.isnan(v) else f"{v:g}"
+                raise UserError(f"problem {pid}: the initial value {name} = {x} is {shown} for "
+                                f"these options; allowed: options where it is a finite real number")
+            out.append(v.real)
+        return tuple(out)
     return initial
 
 
 def _y0(values, states, init, params):
-    base = _numbers(init, params)(values)
+    base = _numbers(init, params, states)(values)
     return [values.get(f"{s}0") if values.get(f"{s}0") is not None else b
             for s, b in zip(states, base)]
 
 
-def _period(expr, params, states, init):
+def _period(expr, params, states, init, pid: str = "?"):
+    from gnibench.suite.foundation.errors import UserError
+
     def period(values):
         subs = {**{n: values[n] for n in params},
                 **{f"{s}0": v for s, v in zip(states, _y0(values, states, init, params))}}
-        return float(expr.subs({s: subs[s.name] for s in expr.free_symbols}))
+        try:
+            value = complex(expr.subs({s: subs[s.name] for s in expr.free_symbols}).evalf(20))
+        except (TypeError, ValueError, ZeroDivisionError, OverflowError):
+            value = complex("nan")
+        if value.imag != 0 or not 0 < value.real < math.inf:
+            shown = f"{value.real:g}" if value.imag == 0 else f"{value:g} (not real)"
+            raise UserError(f"problem {pid}: its period {expr} is {shown} for these "
+                            f"options; allowed: options where it is a finite number > 0")
+        return value.real
     return period
+
+
+def _time_scale(period):
+    """The characteristic time of the defaults (as ``Problem.time_scale_of`` makes it from a
+    period: T/2π to 2 digits), 1 where the period is not a finite number > 0 at these values
+    (an unbound orbit can be integrated; only η needs its period, and refuses it)."""
+    from gnibench.suite.foundation.errors import UserError
+
+    def time_scale(values):
+        try:
+            return float(f"{period(values) / (2 * math.pi):.2g}")
+        except UserError:
+            return 1.0
+    return time_scale
 
 
 def _exact(exprs, params, states):
@@ -167,3 +216,105 @@ def _exact(exprs, params, states):
         return np.column_stack([np.broadcast_to(np.asarray(c, dtype=float), t.shape)
                                 for c in cols])
     return exact
+
+
+# -- checks on load: the integrals are integrals, the exact solution solves, the period is one --
+
+def check_definition(e: Entry, states, syms, params, values, init, integrals, period,
+                     exact) -> None:
+    """Refuse, naming the key, what cannot hold at the entry's default point (parameters and
+    initial values as given), in 30-digit arithmetic: an integral I whose derivative
+    ∇I·f along the field is not 0 there (a first integral, even a partial one, is constant along
+    the solution through that point); an exact solution that does not start at the initial point
+    or does not solve y' = f(y) at t = 0, 0.3 and 1.1; a period that is not a finite number > 0.
+    These are necessary conditions only: they catch a sign or a factor, not every error."""
+    import sympy as sp
+
+    at = {syms[n]: sp.nsimplify(v, rational=True) for n, v in values.items()}
+    y0 = [sp.sympify(x).subs(at) for x in init]
+    at.update({syms[s]: v for s, v in zip(states, y0)})
+    f = _field(e, states, syms)
+    grads = {name: [sp.diff(expr, syms[s]) for s in states] for name, expr in integrals.items()}
+    for k, point in enumerate(_points(states, syms, at, y0)):
+        fv = [x.evalf(30, subs=point) for x in f]
+        for name, grad in grads.items():
+            gv = [g.evalf(30, subs=point) for g in grad]
+            rate = sum(g * x for g, x in zip(gv, fv))
+            scale = sum(abs(g * x) for g, x in zip(gv, fv))
+            if not _finite(scale):
+                continue            # outside the domain (a start where f is not finite is
+                                    # refused when a cell is made, with that reason)
+            if not _small(rate, scale, 1e-15):
+                where = "the initial point" if k == 0 else "a point near the initial one (" + \
+                    ", ".join(f"{s}={float(sp.re(point[syms[s]])):.6g}" for s in states) + ")"
+                raise e.error(f"integrals.{name}", f"not a first integral: d{name}/dt = "
+                                                   f"∇{name}·f = {float(sp.re(rate)):.6g} ≠ 0 "
+                                                   f"at {where}")
+    y0_syms = {sp.Symbol(f"{s}0", real=True): v for s, v in zip(states, y0)}
+    at0 = {**{k: v for k, v in at.items() if k.name in params}, **y0_syms}
+    if period is not None:
+        value = complex(sp.N(period.subs(at0), 20))
+        if value.imag != 0 or not 0 < value.real < math.inf:
+            raise e.error("period", f"{period} is {value.real:g} at the default point; allowed: "
+                                    f"a finite number > 0")
+    if exact is None:
+        return
+    tsym = sp.Symbol("t", real=True)
+    for t in (0, sp.Rational(3, 10), sp.Rational(11, 10)):
+        point = {**at0, tsym: t}
+        x = [z.evalf(30, subs=point) for z in exact]
+        dx = [sp.diff(z, tsym).evalf(30, subs=point) for z in exact]
+        here = {**{k: v for k, v in at.items() if k.name in params},
+                **{syms[s]: v for s, v in zip(states, x)}}
+        fx = [z.evalf(30, subs=here) for z in f]
+        for s, xi, yi, di, fi in zip(states, x, y0, dx, fx):
+            if t == 0 and not _small(xi - yi, abs(yi) + 1, 1e-15):
+                raise e.error(f"exact.{s}", f"starts at {float(sp.re(xi)):.17g}, not at the "
+                                            f"initial value {float(sp.re(sp.N(yi))):.17g}")
+            if not _small(di - fi, abs(di) + abs(fi), 1e-12):
+                raise e.error(f"exact.{s}", f"does not solve the problem: d{s}/dt = "
+                                            f"{float(sp.re(di)):.10g} but f_{s} = "
+                                            f"{float(sp.re(fi)):.10g} at t = {float(t):g} (from "
+                                            f"the default initial point)")
+
+
+def _points(states, syms, at: dict, y0: list) -> list[dict]:
+    """The initial point and three fixed points near it (each state moved by 0.05 to 0.25 of
+    1 + its size): an integral of the user's must be constant along every solution."""
+    import sympy as sp
+
+    out = [at]
+    for k in (1, 2, 3):
+        moved = dict(at)
+        for i, (s, v) in enumerate(zip(states, y0)):
+            step = sp.Rational((7 * i + 5 * k) % 9 - 4, 16)      # -1/4 .. 1/4, fixed
+            moved[syms[s]] = v + step * (1 + abs(sp.N(v, 20)))
+        out.append(moved)
+    return out
+
+
+def _finite(x) -> bool:
+    try:
+        return math.isfinite(abs(complex(x)))
+    except (TypeError, ValueError):
+        return False
+
+
+def _small(value, scale, rtol: float) -> bool:
+    try:
+        v, sc = complex(value), float(scale)
+    except (TypeError, ValueError):
+        return False
+    return abs(v) <= rtol * sc + 1e-25 and math.isfinite(abs(v))
+
+
+def _field(e: Entry, states, syms) -> list:
+    """The vector field as sympy expressions of the states and parameters."""
+    import sympy as sp
+
+    if "hamiltonian" in e.table:
+        H = e.expr("hamiltonian", e.table["hamiltonian"], syms)
+        half = len(states) // 2
+        q, p = states[:half], states[half:]
+        return [sp.diff(H, syms[x]) for x in p] + [-sp.diff(H, syms[x]) for x in q]
+    return [e.expr(f"rhs.{s}", e.table["rhs"][s], syms) for s in states]

@@ -32,7 +32,8 @@ from gnibench.methods.engines.base import EngineRun
 from gnibench.methods.external import ExternalMethod
 from gnibench.suite.foundation.errors import UserError
 
-_ENTRIES: dict[tuple[str, str], object] = {}
+#: (entry, base) -> (function, module, (mtime, size) of its file, digest of its source)
+_ENTRIES: dict[tuple[str, str], tuple] = {}
 
 
 @dataclass(frozen=True)
@@ -54,12 +55,46 @@ class PythonMethod(ExternalMethod):
         return d
 
 
-def resolve_entry(entry: str, base: str = ""):
-    """The function named ``module:function`` (the module imported as usual, else from ``base``,
-    the directory of the definitions file)."""
+def _source(mod) -> tuple[tuple | None, str]:
+    """((mtime, size) of the module's file or None, sha256 of its source)."""
+    import hashlib
+    import inspect
+    import os
+
+    path = getattr(mod, "__file__", None)
+    if path and os.path.isfile(path):
+        st = os.stat(path)
+        with open(path, "rb") as f:
+            return (st.st_mtime_ns, st.st_size), hashlib.sha256(f.read()).hexdigest()
+    try:
+        return None, hashlib.sha256(inspect.getsource(mod).encode()).hexdigest()
+    except (OSError, TypeError):
+        return None, getattr(mod, "__name__", "?")
+
+
+def _changed(stamp, mod) -> bool:
+    import os
+
+    path = getattr(mod, "__file__", None)
+    if stamp is None or not path or not os.path.isfile(path):
+        return False
+    st = os.stat(path)
+    return (st.st_mtime_ns, st.st_size) != stamp
+
+
+def entry_code(entry: str, base: str = "") -> tuple:
+    """(the function named ``module:function``, the sha256 of its module's source). The module is
+    imported as usual, else from ``base`` (the directory of the definitions file); a module whose
+    file changed since it was imported is imported again (an edited integrator runs as edited,
+    and its digest, part of a stored cell's key, says so)."""
     key = (entry, base)
     if key in _ENTRIES:
-        return _ENTRIES[key]
+        fn, mod, stamp, digest = _ENTRIES[key]
+        if not _changed(stamp, mod):
+            return fn, digest
+        if _source(mod)[1] != digest:
+            importlib.reload(mod)
+        del _ENTRIES[key]
     match = re.fullmatch(r"\s*([A-Za-z_][\w.]*)\s*:\s*([A-Za-z_][\w.]*)\s*", entry)
     if match is None:
         raise ValueError(f"bad entry {entry!r}; allowed: 'module:function'")
@@ -74,12 +109,29 @@ def resolve_entry(entry: str, base: str = ""):
             mod = importlib.import_module(module)
         finally:
             sys.path.remove(base)
+    stamp, digest = _source(mod)
     fn = mod
     for part in name.split("."):
         fn = getattr(fn, part)
     if not callable(fn):
         raise TypeError(f"{entry} is not callable")
-    _ENTRIES[key] = fn
+    _ENTRIES[key] = (fn, mod, stamp, digest)
+    return fn, digest
+
+
+def resolve_entry(entry: str, base: str = ""):
+    """The function named ``module:function`` (:func:`entry_code`)."""
+    return entry_code(entry, base)[0]
+
+
+def _current(entry: str, base: str, code: str):
+    """The function of a method built when its module's source had the digest ``code``; a
+    ValueError when the module has changed since (its results would be stored under the key of
+    the code it was loaded with: load the definitions again)."""
+    fn, digest = entry_code(entry, base)
+    if code and digest != code:
+        raise ValueError(f"the module of {entry} changed after its definitions were loaded; "
+                         f"load them again (gnibench.load, or a new command)")
     return fn
 
 
@@ -106,15 +158,35 @@ def _state(value, n: int) -> np.ndarray:
     return y
 
 
-def stepper(entry: str, base: str):
+def _count(result: dict, key: str) -> int:
+    """The solver's count ``key`` (a non-negative integer; a ValueError otherwise)."""
+    value = result.get(key, 0)
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer, float)) or \
+            not 0 <= value < 2 ** 62 or int(value) != value:
+        raise ValueError(f"returned {key} = {value!r}; expected a count (an integer >= 0)")
+    return int(value)
+
+
+def _failed(n: int, problem, reason: str) -> EngineRun:
+    """A cell whose integrator could not be called: status ``error``, the initial point only."""
+    y0 = np.array([problem.record.y0(problem.values)], dtype=float).reshape(1, n)
+    return EngineRun(y=y0, y_full=None, steps=np.zeros(1, dtype=np.int64), nfev=np.zeros(1),
+                     status="error", reason=reason, setup_seconds=0.0, seconds=0.0,
+                     info={"engine": "python"})
+
+
+def stepper(entry: str, base: str, code: str = ""):
     """``run(problem, values, grid, kernel) -> EngineRun`` of a ``python`` method (``kernel``: the
     problem's compiled module, passed by the driver to every engine; unused here)."""
 
     def run(problem, values, grid, kernel=None) -> EngineRun:
         t0 = time.perf_counter()
-        step = resolve_entry(entry, base)
-        f, count = _field(problem)
         n = problem.record.dim
+        try:
+            step = _current(entry, base, code)
+        except Exception as e:  # noqa: BLE001 - the user's module: a status, not a crash
+            return _failed(n, problem, f"{entry}: {type(e).__name__}: {e}")
+        f, count = _field(problem)
         marks = grid.step
         rows = len(marks)
         y = np.array(problem.record.y0(problem.values), dtype=float)
@@ -147,14 +219,17 @@ def stepper(entry: str, base: str):
     return run
 
 
-def solver(entry: str, base: str):
+def solver(entry: str, base: str, code: str = ""):
     """``run(problem, values, grid, kernel) -> EngineRun`` of a ``python-solver`` method."""
 
     def run(problem, values, grid, kernel=None) -> EngineRun:
         t0 = time.perf_counter()
-        solve = resolve_entry(entry, base)
-        f, count = _field(problem)
         n = problem.record.dim
+        try:
+            solve = _current(entry, base, code)
+        except Exception as e:  # noqa: BLE001 - the user's module: a status, not a crash
+            return _failed(n, problem, f"{entry}: {type(e).__name__}: {e}")
+        f, count = _field(problem)
         t_eval = np.array(grid.t, dtype=float)
         y0 = np.array(problem.record.y0(problem.values), dtype=float)
         setup = time.perf_counter() - t0
@@ -166,7 +241,8 @@ def solver(entry: str, base: str):
             if isinstance(result, dict):
                 status = str(result.get("status", "ok"))
                 reason = "" if status == "ok" else str(result.get("message", ""))
-                steps, reported = int(result.get("steps", 0)), result.get("nfev")
+                steps, reported = _count(result, "steps"), result.get("nfev")
+                reported = None if reported is None else _count(result, "nfev")
                 result = result["y"]
             y = np.asarray(result, dtype=float)
             if y.ndim != 2 or y.shape[1] != n or len(y) > len(t_eval):
@@ -183,9 +259,12 @@ def solver(entry: str, base: str):
             status, reason = "error", f"the solver returned {len(y)} of {len(t_eval)} samples"
         if status not in ("ok", "nonfinite", "error", "max_steps", "step_too_small"):
             status, reason = "error", f"{entry} returned status {status!r}: {reason}"
+        if not len(y):                  # nothing usable: the initial point, as a failed call
+            y = y0[None, :]
         rows = len(y)
         nfev, counts = np.full(rows, np.nan), np.zeros(rows, dtype=np.int64)
-        if rows:
+        nfev[0] = 0.0
+        if rows > 1:
             nfev[-1] = float(count[0] if reported is None else reported)
             counts[-1] = steps
         info = {"engine": "python", "entry": entry, "steps": "as reported by the solver (last "
