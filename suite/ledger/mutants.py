@@ -6,7 +6,8 @@ replacement, what it does and why it is plausible. For each mutant, :func:`run_m
 
 1. copies the installed package (the repository root is the package ``gnibench``) to
    ``<work>/<id>/gnibench`` and applies the mutant to the copy (refusing a snippet that is not
-   found exactly once);
+   found exactly once; a mutant's further edits ``more``, the same bug where its text is written
+   twice, e.g. a plain step and its compensated twin ``step_sum``, likewise);
 2. runs ``gnibench verify`` on the copy in a subprocess, with ``PYTHONPATH`` pointing at the copy
    (checked: the subprocess imports the copy, not the installed tree), its own kernel cache
    (``GNIBENCH_CACHE_DIR``, seeded by hard links with the generated kernels and problem code of
@@ -21,7 +22,8 @@ replacement, what it does and why it is plausible. For each mutant, :func:`run_m
    itself fails (exit code other than 0 and 1, or the time limit: a hang is noticed too).
 
 The unmutated baseline runs first, through the same path. The result, ``<out>/mutants.json``
-(score, and per mutant the claims and tests that killed it), is what the report's ledger page and
+(score, date, and per mutant the claims and tests that killed it; rewritten after every mutant,
+so an interrupted campaign keeps what it measured, with ``complete`` false), is what the report's ledger page and
 the README show; the survivors are the ledger's known blind spots (each catalog entry may say
 why it survives, ``blind_spot``).
 """
