@@ -73,7 +73,8 @@ def mutation_summary(directory: Path | None) -> dict | None:
     rows = doc.get("mutants", [])
     survivors = [m for m in rows if not m.get("killed")]
     return {"total": len(rows), "killed": len(rows) - len(survivors), "scale": doc.get("scale", ""),
-            "score": doc.get("score"), "survivors": survivors, "mutants": rows}
+            "score": doc.get("score"), "survivors": survivors, "mutants": rows,
+            "date": doc.get("date", ""), "planned": doc.get("planned", len(rows))}
 
 
 def render_ledger(table: pd.DataFrame, meta: dict, mutants: dict | None = None) -> str:
@@ -89,9 +90,13 @@ def render_ledger(table: pd.DataFrame, meta: dict, mutants: dict | None = None) 
                      "to measure):** " + ", ".join(code(i) for i in unexpected["id"]) + ".")
     lines += ["", VERDICTS_TEXT, ""]
     if mutants:
-        lines.append(f"**Mutation testing** ({escape(mutants['scale'])} scale): {mutants['killed']} "
-                     f"of {mutants['total']} mutants of the integrators and metrics killed by the "
-                     "ledger or the tests.")
+        when = f", {escape(mutants['date'])}" if mutants.get("date") else ""
+        lines.append(f"**Mutation testing** ({escape(mutants['scale'])} scale{when}): "
+                     f"{mutants['killed']} of {mutants['total']} mutants of the integrators and "
+                     "metrics killed by the ledger or the tests."
+                     + (f" The run was interrupted: {mutants['planned'] - mutants['total']} of the "
+                        f"{mutants['planned']} mutants it was asked for did not run."
+                        if mutants.get("planned", 0) > mutants["total"] else ""))
         for m in mutants["survivors"]:
             lines.append(f"* survived: {code(m['id'])} — {escape(m.get('description', ''))}"
                          + (f" ({escape(m['blind_spot'])})" if m.get("blind_spot") else ""))

@@ -38,6 +38,32 @@ def test_a_snippet_must_occur_exactly_once(tmp_path):
     assert "occurs 0 times" in M.check(missing, copy)
 
 
+def test_a_mutant_with_more_edits_changes_every_place(tmp_path):
+    """The same bug written twice (the plain step and its compensated twin step_sum) is one
+    mutant with further edits; each snippet must occur exactly once."""
+    catalog, _ = M.load_catalog()
+    m = next(x for x in catalog if x.id == "symplectic-euler-stale-force")
+    assert len(m.edits()) == 2
+    copy = M.copy_package(tmp_path)
+    M.apply(m, copy)
+    text = (copy / m.file).read_text()
+    assert all(new in text and old not in text for old, new in m.edits())
+    bad = M.Mutant("z", m.file, m.original, m.replacement, "d", "p", more=(("dnorm?", "x"),))
+    assert "snippet 2 occurs 0 times" in M.check(bad)
+    with pytest.raises(UserError, match="pairs"):
+        M.load_catalog('[[mutant]]\nid = "a"\nfile = "f"\noriginal = "x"\nreplacement = "y"\n'
+                       'description = "d"\nplausible = "p"\nmore = [["only one"]]\n')
+
+
+def test_compensated_twins_are_mutated_with_their_plain_step():
+    """Every mutant of a generator that writes a plain step and a ``step_sum`` twin hits both
+    (sum=compensated cells run the twin): the partitioned blocks and Störmer-Verlet's halves."""
+    catalog, _ = M.load_catalog()
+    twins = {m.id: m for m in catalog if m.file == "methods/partitioned.py"}
+    assert twins and all(len(m.edits()) == 2 for m in twins.values()), list(twins)
+    assert all("_sum" in m.more[0][0] or "f(y, par)" in m.more[0][1] for m in twins.values())
+
+
 def test_a_mutant_changes_the_copy_only(tmp_path):
     (catalog, _), root = M.load_catalog(), M.package_root()
     m = next(x for x in catalog if x.id == "invariant-error-sign")
@@ -58,4 +84,6 @@ def test_the_machinery_kills_a_mutant_at_quick_scale(tmp_path):
     assert doc["baseline"]["exit"] == 0 and doc["baseline"]["unexpected"] == []
     (row,) = doc["mutants"]
     assert row["killed"] and row["claims"] == ["HLW-1.2-d"], row
-    assert json.loads((tmp_path / "mutants.json").read_text())["score"] == 1.0
+    written = json.loads((tmp_path / "mutants.json").read_text())
+    assert written["score"] == 1.0 and written["complete"] and written["planned"] == 1
+    assert written["date"] == doc["date"] and len(written["date"]) == 10

@@ -6,7 +6,8 @@ replacement, what it does and why it is plausible. For each mutant, :func:`run_m
 
 1. copies the installed package (the repository root is the package ``gnibench``) to
    ``<work>/<id>/gnibench`` and applies the mutant to the copy (refusing a snippet that is not
-   found exactly once);
+   found exactly once; a mutant's further edits ``more``, the same bug where its text is written
+   twice, e.g. a plain step and its compensated twin ``step_sum``, likewise);
 2. runs ``gnibench verify`` on the copy in a subprocess, with ``PYTHONPATH`` pointing at the copy
    (checked: the subprocess imports the copy, not the installed tree), its own kernel cache
    (``GNIBENCH_CACHE_DIR``, seeded by hard links with the generated kernels and problem code of
@@ -21,7 +22,8 @@ replacement, what it does and why it is plausible. For each mutant, :func:`run_m
    itself fails (exit code other than 0 and 1, or the time limit: a hang is noticed too).
 
 The unmutated baseline runs first, through the same path. The result, ``<out>/mutants.json``
-(score, and per mutant the claims and tests that killed it), is what the report's ledger page and
+(score, date, and per mutant the claims and tests that killed it; rewritten after every mutant,
+so an interrupted campaign keeps what it measured, with ``complete`` false), is what the report's ledger page and
 the README show; the survivors are the ledger's known blind spots (each catalog entry may say
 why it survives, ``blind_spot``).
 """
@@ -59,6 +61,12 @@ class Mutant:
     description: str
     plausible: str
     blind_spot: str = ""
+    #: further (original, replacement) pairs in the same file, applied with the first: one bug
+    #: whose text occurs in two places (a plain step and its compensated twin ``step_sum``)
+    more: tuple = ()
+
+    def edits(self) -> list[tuple[str, str]]:
+        return [(self.original, self.replacement)] + [tuple(pair) for pair in self.more]
 
 
 def catalog_text() -> str:
@@ -71,7 +79,10 @@ def load_catalog(text: str | None = None) -> tuple[list[Mutant], dict]:
     settings = {k: v for k, v in doc.items() if k != "mutant"}
     mutants, seen = [], set()
     for entry in doc.get("mutant", []):
-        m = Mutant(**entry)
+        if not all(isinstance(p, list) and len(p) == 2 for p in entry.get("more", [])):
+            raise UserError(f"mutant catalog: {entry.get('id')}: more must list [original, "
+                            f"replacement] pairs")
+        m = Mutant(**{**entry, "more": tuple(tuple(p) for p in entry.get("more", []))})
         if m.id in seen:
             raise UserError(f"mutant catalog: {m.id} is listed twice")
         seen.add(m.id)
@@ -90,11 +101,14 @@ def check(mutant: Mutant, root: Path | None = None) -> str:
     path = (root or package_root()) / mutant.file
     if not path.is_file():
         return f"{mutant.id}: no file {mutant.file}"
-    n = path.read_text(encoding="utf-8").count(mutant.original)
-    if n != 1:
-        return f"{mutant.id}: the snippet occurs {n} times in {mutant.file} (must be once)"
-    if mutant.original == mutant.replacement:
-        return f"{mutant.id}: the replacement equals the snippet"
+    text = path.read_text(encoding="utf-8")
+    for k, (original, replacement) in enumerate(mutant.edits()):
+        which = "the snippet" if k == 0 else f"snippet {k + 1}"
+        n = text.count(original)
+        if n != 1:
+            return f"{mutant.id}: {which} occurs {n} times in {mutant.file} (must be once)"
+        if original == replacement:
+            return f"{mutant.id}: the replacement of {which} equals it"
     return ""
 
 
@@ -110,8 +124,10 @@ def apply(mutant: Mutant, copy: Path) -> None:
     if problem:
         raise UserError(f"mutant {problem}; refusing to apply it")
     path = copy / mutant.file
-    path.write_text(path.read_text(encoding="utf-8").replace(mutant.original, mutant.replacement),
-                    encoding="utf-8")
+    text = path.read_text(encoding="utf-8")
+    for original, replacement in mutant.edits():
+        text = text.replace(original, replacement)
+    path.write_text(text, encoding="utf-8")
 
 
 def _env(import_root: Path, cache: Path) -> dict:
@@ -119,6 +135,15 @@ def _env(import_root: Path, cache: Path) -> dict:
     env["PYTHONPATH"] = str(import_root)
     env["GNIBENCH_CACHE_DIR"] = str(cache)
     env.pop("PYTEST_ADDOPTS", None)
+    # tests/test_hairer_counts.py compares with Hairer's Fortran in a venv it makes once in the
+    # user's cache (not keyed by content, so not seeded): point the copy at it, else every mutant
+    # would build its own
+    if "GNIBENCH_FORTRAN_SCIPY_PYTHON" not in env:
+        from gnibench.suite.foundation.cache import cache_dir
+
+        fortran = cache_dir() / "scipy-fortran" / "bin" / "python"
+        if fortran.is_file():
+            env["GNIBENCH_FORTRAN_SCIPY_PYTHON"] = str(fortran)
     return env
 
 
@@ -230,6 +255,20 @@ def judge_mutant(raw: dict, baseline: dict) -> dict:
             "killed": bool(claims or raw["tests_failed"] or crash)}
 
 
+def _document(scale: str, claims: list[str], tests: list[str], results: list[dict],
+              baseline: dict, planned: int) -> dict:
+    killed = sum(r["killed"] for r in results)
+    return {"scale": scale, "claims": claims, "tests": tests, "mutants": results,
+            "killed": killed, "total": len(results), "planned": planned,
+            "complete": len(results) == planned, "date": time.strftime("%Y-%m-%d"),
+            "score": killed / len(results) if results else None, "baseline": baseline}
+
+
+def _write(out: Path, doc: dict) -> None:
+    (out / "mutants.json").write_text(json.dumps(doc, indent=1, ensure_ascii=False) + "\n",
+                                      encoding="utf-8")
+
+
 def run_mutants(mutants: list[Mutant], out: Path, scale: str = "quick", jobs: int = 2,
                 claims: list[str] | None = None, tests: list[str] | None = None,
                 keep: bool = False, timeout: float = 3600.0, log=print,
@@ -238,6 +277,8 @@ def run_mutants(mutants: list[Mutant], out: Path, scale: str = "quick", jobs: in
     own cache is seeded from ``baseline_seed`` (default: the user's kernel cache; the baseline
     runs the installed code unchanged), and then seeds every mutant's own cache."""
     problems = [p for p in (check(m) for m in mutants) if p]
+    if len(mutants) != len({m.id for m in mutants}):
+        raise UserError("mutants: a mutant is listed twice")
     if problems:
         raise UserError("; ".join(problems))
     _, settings = load_catalog()
@@ -257,28 +298,27 @@ def run_mutants(mutants: list[Mutant], out: Path, scale: str = "quick", jobs: in
         raise UserError(f"the catalog's tests fail on the unmutated baseline: "
                         f"{', '.join(base['tests_failed'][:5])}; see {base['home']}")
     noisy = sorted(r["id"] for r in base["rows"] if r.get("unexpected"))
+    baseline = {"exit": base["exit"], "unexpected": noisy, "seconds": base["seconds"],
+                "verdicts": {v: sum(r["verdict"] == v for r in base["rows"])
+                             for v in dict.fromkeys(r["verdict"] for r in base["rows"])}}
     results = []
     for k, m in enumerate(mutants, start=1):
         raw = run_one(m, work, scale, jobs, claims, tests, Path(base["cache"]), timeout, base)
         verdict = judge_mutant(raw, base)
         row = {**asdict(m), **verdict, "seconds": raw["seconds"], "exit": raw["exit"],
                "tests_run": raw["tests_run"]}
-        row.pop("original"), row.pop("replacement")
+        for key in ("original", "replacement", "more"):
+            row.pop(key)
         results.append(row)
         by = ", ".join(verdict["claims"][:6] + verdict["tests"][:3]) or verdict["crash"]
         log(f"gnibench: mutants: [{k}/{len(mutants)}] {m.id}: "
             + (f"killed by {by}" if verdict["killed"] else "SURVIVED") + f" ({raw['seconds']} s)")
         if not keep:
             shutil.rmtree(raw["home"], ignore_errors=True)
-    killed = sum(r["killed"] for r in results)
-    doc = {"scale": scale, "claims": claims, "tests": tests, "mutants": results,
-           "killed": killed, "total": len(results),
-           "score": killed / len(results) if results else None,
-           "baseline": {"exit": base["exit"], "unexpected": noisy, "seconds": base["seconds"],
-                        "verdicts": {v: sum(r["verdict"] == v for r in base["rows"])
-                                     for v in dict.fromkeys(r["verdict"] for r in base["rows"])}}}
-    (out / "mutants.json").write_text(json.dumps(doc, indent=1, ensure_ascii=False) + "\n",
-                                      encoding="utf-8")
+        # written after every mutant: an interrupted campaign keeps what it measured
+        _write(out, _document(scale, claims, tests, results, baseline, len(mutants)))
+    doc = _document(scale, claims, tests, results, baseline, len(mutants))
+    _write(out, doc)
     if not keep:
         shutil.rmtree(work, ignore_errors=True)
     return doc
