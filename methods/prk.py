@@ -22,6 +22,7 @@ from fractions import Fraction as Fr
 from gnibench.methods.base import Method
 from gnibench.methods.kernels import prk
 from gnibench.methods.tableau import lit
+from gnibench.suite.foundation.errors import UserError
 from gnibench.suite.foundation.templates import template
 
 _H = Fr(1, 2)
@@ -161,4 +162,9 @@ class CompositionMethod(Method):
     basis: Method | None = None
 
     def check_structure(self, problem, has_modifiers: bool) -> None:
-        self.basis.check_structure(problem, has_modifiers)
+        """The basis's refusal, said of this method (the one the user named)."""
+        try:
+            self.basis.check_structure(problem, has_modifiers)
+        except UserError as e:
+            raise UserError(f"method {self.id} (a composition of {self.basis.id}): "
+                            f"{e}".replace(f"method {self.basis.id} ", "it ", 1)) from None

@@ -183,3 +183,19 @@ def test_expressions_are_exact():
     x = sp.Symbol("x")
     assert parse("0.1") == sp.Rational(1, 10) and parse("2-2^(1/3)") == 2 - sp.cbrt(2)
     assert parse("-x**2 + atan2(x, 1) + pi", {"x": x}) == -x ** 2 + sp.atan2(x, 1) + sp.pi
+
+
+def test_a_composition_refused_by_its_basis_names_itself(tmp_path):
+    """The user named the composition: the refusal says so (and that it comes from its basis)."""
+    path = _defs(tmp_path, '''
+[[method]]
+id = "tj4-of-sv"
+kind = "composition"
+basis = "stormer-verlet"
+gamma = ["1/(2-2^(1/3))", "-2^(1/3)/(2-2^(1/3))", "1/(2-2^(1/3))"]
+order = 4
+''')
+    loader.load(path)
+    with pytest.raises(UserError, match=r"^method tj4-of-sv \(a composition of stormer-verlet\): "
+                                        r"it needs a partitioned system"):
+        solve("euler-so4", "tj4-of-sv:h=0.01", steps=2)

@@ -64,7 +64,8 @@ def as_table(what: str, rows: list[dict]) -> str:
             ex = r["properties"]["explicit"]
             if isinstance(ex, str):
                 props.append(f"explicit {ex}")
-            out.append(f"{r['id']}  order {r['order']}  {r['family']}  [{', '.join(props)}]  "
+            order = r["order"] or "not declared"     # a Python method may declare none
+            out.append(f"{r['id']}  order {order}  {r['family']}  [{', '.join(props)}]  "
                        f"{r['reference']}  {r['doc']}")
         out.append(f"    options: {_params(r['params'])}")
     return "\n".join(out)
