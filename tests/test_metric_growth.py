@@ -123,3 +123,13 @@ def test_symplectic_euler_energy_error_is_bounded_on_the_oscillator():
     assert abs(A - h / 4) <= h**2
     W = s["growth_window_end"] - s["growth_window_start"]
     assert abs(s["drift_H"]) <= 12 * A * (W / 2 + 0.25) / W**3
+
+
+def test_each_decade_weighs_the_same_for_a_broken_power_law():
+    """env = t on [1, 10], 10 (t/10)^3 on [10, 100]: with equal weight per decade (log-spaced
+    points, as documented) the least-squares slope over [1, 100] is the mean of the two local
+    slopes, 2, up to the sampling (about 1/points); linearly spaced points would weigh the last
+    decade ~90 % and give ~2.9."""
+    t = np.linspace(0.0, 100.0, 100_001)
+    env = np.where(t <= 10, t, 10 * (t / 10) ** 3)
+    assert abs(growth_exponent(t, env, 1.0, 100.0) - 2.0) < 0.05
