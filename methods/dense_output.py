@@ -162,6 +162,28 @@ class DenseOutput:
 # -- code generation --------------------------------------------------------------------------------
 
 
+def _stage_lines(dense: DenseOutput, tab, count: int, hairer: bool) -> tuple[list[str], set[int]]:
+    """The head of ``dense_from_stages``: the step's ``count`` stages unpacked, f(y1) as the last
+    stage (always in Hairer's form; for polynomial weights when the pair is FSAL, and for every
+    extra stage that is f(y1)), the extra stages evaluated; and the ``erk_lc`` arities used."""
+    s = tab.stages
+    a_all = dense.stages_a(tab)
+    arities: set[int] = set()
+    unpack = ", ".join(f"k{j}" for j in range(count)) + ("," if count == 1 else "")
+    lines = ["\n@njit(cache=True)\ndef dense_from_stages(y, y1, h, par, ks, f1):", f"    {unpack} = ks"]
+    if hairer or count < s:
+        lines.append(f"    k{s - 1} = f1")                  # an FSAL pair's last stage
+    for i in range(s, s + dense.extra_stages):
+        if not hairer and dense.is_f1(i - s, tab):
+            lines.append(f"    k{i} = f1")
+            continue
+        terms = [(a_all[i][j], j) for j in range(i) if a_all[i][j] != 0]
+        arities.add(len(terms))
+        args = ", ".join(f"{lit(c)}, k{j}" for c, j in terms)
+        lines.append(f"    k{i} = f(erk_lc{len(terms)}(y, h, {args}), par)")
+    return lines, arities
+
+
 def generate_dense(dense: DenseOutput, tab, count: int, n: int) -> tuple[str, set[int]]:
     """Source of ``dense_from_stages``, ``dense_eval`` and ``dense_slope`` for an n-dimensional
     cell, and the arities of the ``erk_lc`` helpers it uses.
@@ -174,16 +196,7 @@ def generate_dense(dense: DenseOutput, tab, count: int, n: int) -> tuple[str, se
     if dense.polynomial:
         return _generate_polynomial(dense, tab, count, n)
     s, comma = tab.stages, "," if n == 1 else ""
-    a_all = dense.stages_a(tab)
-    arities: set[int] = set()
-    unpack = ", ".join(f"k{j}" for j in range(count)) + ("," if count == 1 else "")
-    lines = ["\n@njit(cache=True)\ndef dense_from_stages(y, y1, h, par, ks, f1):",
-             f"    {unpack} = ks", f"    k{s - 1} = f1"]
-    for i in range(s, s + dense.extra_stages):
-        terms = [(a_all[i][j], j) for j in range(i) if a_all[i][j] != 0]
-        arities.add(len(terms))
-        args = ", ".join(f"{lit(c)}, k{j}" for c, j in terms)
-        lines.append(f"    k{i} = f(erk_lc{len(terms)}(y, h, {args}), par)")
+    lines, arities = _stage_lines(dense, tab, count, hairer=True)
 
     def tup(items):
         return "(" + ", ".join(items) + comma + ")"
@@ -249,21 +262,8 @@ def _generate_polynomial(dense: DenseOutput, tab, count: int, n: int) -> tuple[s
     u(θ) = y0 + θ (y1 - y0) + θ (θ - 1) Σ_k θ^k G_k,  G_k = h Σ_j q_jk K_j  (:func:`_quotients`),
     so that u(1) = y1 to round-off whatever the size of Verner's weights (Vern6's reach 1.2e5 and
     cancel to b_j: summed at θ = 1 in doubles they miss y1 by 8e-13 per step)."""
-    s, comma = tab.stages, "," if n == 1 else ""
-    a_all = dense.stages_a(tab)
-    arities: set[int] = set()
-    unpack = ", ".join(f"k{j}" for j in range(count)) + ("," if count == 1 else "")
-    lines = ["\n@njit(cache=True)\ndef dense_from_stages(y, y1, h, par, ks, f1):", f"    {unpack} = ks"]
-    if count < s:
-        lines.append(f"    k{s - 1} = f1")                  # an FSAL pair's last stage
-    for i in range(s, s + dense.extra_stages):
-        if dense.is_f1(i - s, tab):
-            lines.append(f"    k{i} = f1")
-            continue
-        terms = [(a_all[i][j], j) for j in range(i) if a_all[i][j] != 0]
-        arities.add(len(terms))
-        args = ", ".join(f"{lit(c)}, k{j}" for c, j in terms)
-        lines.append(f"    k{i} = f(erk_lc{len(terms)}(y, h, {args}), par)")
+    comma = "," if n == 1 else ""
+    lines, arities = _stage_lines(dense, tab, count, hairer=False)
 
     def tup(items):
         return "(" + ", ".join(items) + comma + ")"
