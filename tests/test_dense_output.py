@@ -104,15 +104,9 @@ def _slope(hs, errs, floor=1e-13):
     return np.polyfit(np.log(hs[keep]), np.log(errs[keep]), 1)[0]
 
 
-@pytest.mark.parametrize("method,h0", [("dopri5", 0.4), ("dop853", 0.8)])
-def test_interpolant_order(kepler, method, h0):
-    """Local error of u(θ) at interior θ against the exact flow: O(h^(q+1)) for an order-q
-    extension (|slope - (q+1)| <= 0.35, the verification tolerance of STYLE.md).
-
-    Not measurable to ±0.35 for Verner's extensions (their order is proved by the exact
-    conditions above; the compiled form is checked one-sided below): measured 7.45 for Vern6
-    (order 6), 8.83 for Vern7 (order 6, 1.3e-4 short of 7), and Vern8's weights (up to 1.4e6,
-    cancelling) put its round-off floor at 4e-13 after three halvings."""
+def _interior_slope(kepler, method: str, h0: float) -> tuple[float, int]:
+    """The log-log slope of the compiled u(θ)'s local error at θ = 0.3, 0.7 against the exact
+    flow, over 8 halvings of h from h0; and the extension's declared order q."""
     prob, par, y0 = kepler
     mod, _, _ = load(prob, parse_method(method, prob))
     hs = h0 / 2.0 ** np.arange(8)
@@ -124,6 +118,19 @@ def test_interpolant_order(kepler, method, h0):
     q = PAIRS[method].dense.order
     slope = _slope(hs, np.array(errs))
     print(f"{method}: errors {np.array(errs)}, slope {slope:.3f}")
+    return slope, q
+
+
+@pytest.mark.parametrize("method,h0", [("dopri5", 0.4), ("dop853", 0.8)])
+def test_interpolant_order(kepler, method, h0):
+    """Local error of u(θ) at interior θ against the exact flow: O(h^(q+1)) for an order-q
+    extension (|slope - (q+1)| <= 0.35, the verification tolerance of STYLE.md).
+
+    Not measurable to ±0.35 for Verner's extensions (their order is proved by the exact
+    conditions above; the compiled form is checked one-sided below): measured 7.45 for Vern6
+    (order 6), 8.83 for Vern7 (order 6, 1.3e-4 short of 7), and Vern8's weights (up to 1.4e6,
+    cancelling) put its round-off floor at 4e-13 after three halvings."""
+    slope, q = _interior_slope(kepler, method, h0)
     assert abs(slope - (q + 1)) <= 0.35
 
 
@@ -134,17 +141,7 @@ def test_polynomial_interpolant_order(kepler, method, h0):
     (slope >= q + 1 - 0.35). One-sided, since on this orbit the fit over the few points above the
     round-off floor comes out steeper (measured: Vern6 7.45, Vern7 8.83, Vern9 12.2, for q + 1 =
     7, 7, 10); a wrong form that still meets y0 and y1 at the ends (test_endpoints) is order 1."""
-    prob, par, y0 = kepler
-    mod, _, _ = load(prob, parse_method(method, prob))
-    hs = h0 / 2.0 ** np.arange(8)
-    errs = []
-    for h in hs:
-        _, cf = mod.dense_coeffs(y0, h, par, mod.f(y0, par))
-        errs.append(max(np.max(np.abs(np.array(mod.dense_eval(cf, th)) - _exact(prob, y0, th * h)))
-                        for th in (0.3, 0.7)))
-    q = PAIRS[method].dense.order
-    slope = _slope(hs, np.array(errs))
-    print(f"{method}: errors {np.array(errs)}, slope {slope:.3f}")
+    slope, q = _interior_slope(kepler, method, h0)
     assert slope >= q + 1 - 0.35
 
 
