@@ -204,3 +204,18 @@ def test_eta_sets_the_period_grid_in_experiments_and_solve():
                              'methods = ["dopri5:rtol=1e-8,atol=1e-8"]\ndt_out = 0.5\n', "e").cells
     assert [c.dt_out for c in cells] == [pytest.approx(1.0, rel=1e-14), None,
                                          pytest.approx(1.0, rel=1e-14), 0.5]
+
+
+@pytest.mark.parametrize("angle", [1e-12, 1e-9, 3e-8, 1e-4, 1.0, math.pi - 1e-9, -1e-10])
+def test_tiny_and_near_pi_angles_keep_their_digits(angle):
+    """η ([B] §5.2, the angle between q(nT) and q(0)) by atan2(|q0 × q|, q0·q): absolute error
+    a few ε at every angle. The seed's arccos(q0·q / |q0||q|) cannot resolve angles below
+    √(2ε) ≈ 2e-8 (cos θ = 1 - θ²/2 rounds to 1) nor within that of π (mutant eta-arccos)."""
+    from gnibench.suite.metrics.position_in_orbit import signed_angles
+
+    q0 = np.array([0.3, -1.2, 0.7])
+    p0 = np.array([0.9, 0.4, -0.2])
+    c0 = np.cross(q0, p0)
+    q = (rotation(c0, angle) @ q0)[None, :] * np.array([[1.0], [2.5]])    # any |q|
+    got = signed_angles(q0, q, c0)
+    assert np.all(np.abs(got - angle) <= 8 * np.finfo(float).eps * max(1.0, abs(angle))), got
