@@ -212,3 +212,59 @@ def test_a_lock_held_by_a_leftover_process_is_named(tmp_path, capsys):
     finally:
         holder.kill()
         holder.wait()
+
+
+FORK_AND_TERMINATE = """
+import multiprocessing as mp, signal, sys, time
+from gnibench.suite.cli import signals
+
+def idle():
+    time.sleep(60)
+
+ctx = mp.get_context("fork")
+with signals.handling():
+    for _ in range(300):
+        p = ctx.Process(target=idle)
+        p.start()
+        p.terminate()                    # often before the child's after-fork hook has run
+        p.join()
+        assert p.exitcode == -signal.SIGTERM, p.exitcode
+    assert signal.pthread_sigmask(signal.SIG_BLOCK, []) == set()     # the parent's mask back
+    time.sleep(signals.GRACE + 0.5)      # a stray byte in the wakeup pipe would end us by now
+print("alive")
+"""
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="fork")
+def test_a_child_terminated_right_after_its_fork_never_ends_the_parent():
+    """A child forked while a command runs and terminated at once must not write the signal into
+    the parent's wakeup pipe (it ended the parent with 143 before the fork hooks blocked the
+    signals: an xdist worker died in CI). 300 forks; before the fix every run died."""
+    out = subprocess.run([sys.executable, "-c", FORK_AND_TERMINATE], capture_output=True,
+                         text=True, timeout=SAFETY)
+    assert (out.returncode, out.stdout.strip()) == (0, "alive"), out.stderr[-2000:]
+
+
+CHILD_STATE = """
+import os, signal, sys
+from gnibench.suite.cli import signals
+
+with signals.handling():
+    r, w = os.pipe()
+    pid = os.fork()
+    if pid == 0:
+        state = (signal.set_wakeup_fd(-1), signal.getsignal(signal.SIGTERM) == signal.SIG_DFL,
+                 sorted(signal.pthread_sigmask(signal.SIG_BLOCK, [])))
+        os.write(w, repr(state).encode())
+        os._exit(0)
+    os.waitpid(pid, 0)
+    print(os.read(r, 200).decode())
+"""
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="fork")
+def test_a_forked_child_has_no_wakeup_fd_default_handlers_and_the_parents_mask():
+    out = subprocess.run([sys.executable, "-c", CHILD_STATE], capture_output=True, text=True,
+                         timeout=SAFETY)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.strip() == "(-1, True, [])"

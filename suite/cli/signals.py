@@ -23,6 +23,15 @@ long compile, or a long C call holding the main thread), it ends the process wit
 the same exit code. Nothing finished is lost: every result file and stored cell is committed by
 an atomic rename (a temporary file may remain, removed by the next run), and pool workers die
 with their parent (:mod:`gnibench.suite.runs.executors`).
+
+Forks. A forked child inherits the C-level handler and the wakeup fd: a signal that reaches it
+before its after-fork hook has reset them is written into the parent's pipe, and the parent's
+watchdog, seeing a signal its own main thread never raises, ends the parent after GRACE (seen:
+a report drawing process forked by multiprocessing and terminated at once, because the run
+failed on a locked directory, ended the parent with exit code 143). So, while a command runs,
+SIGINT and SIGTERM are blocked in the forking thread across every ``os.fork`` (the parent's mask
+is restored after it) and in the child until its hook has reset the wakeup fd and the
+dispositions; a signal sent meanwhile stays pending and then acts on the child alone.
 """
 from __future__ import annotations
 
@@ -51,6 +60,7 @@ class _State:
         self.active = False
         self.stop = threading.Event()
         self.previous_unraisable = None
+        self.fds: tuple[int, int] | None = None  # the wakeup pipe (read end, write end)
 
 
 _state = _State()
@@ -116,7 +126,17 @@ def _main_frame():
 
 
 def _watch(read_fd: int) -> None:
-    """Deliver pending signals again; hard exit when one is not raised within GRACE seconds."""
+    """Deliver pending signals again; hard exit when one is not raised within GRACE seconds.
+    The thread owns ``read_fd`` and closes it when it ends: closed by another thread while this
+    one waits on it, its number could be given to a new file that this thread would then read."""
+    try:
+        _watch_fd(read_fd)
+    finally:
+        with contextlib.suppress(OSError):
+            os.close(read_fd)
+
+
+def _watch_fd(read_fd: int) -> None:
     came: tuple[int, float] | None = None       # a signal the handler has not raised yet
     while not _state.stop.is_set():
         waiting = came is not None or _state.pending is not None
@@ -148,21 +168,50 @@ def _watch(read_fd: int) -> None:
             _hard_exit(came[0])
 
 
+_fork_masks = threading.local()       # the forking thread's signal mask before the fork
+
+
+def _before_fork() -> None:
+    _fork_masks.mask = (signal.pthread_sigmask(signal.SIG_BLOCK, SIGNALS) if _state.active
+                        else None)
+
+
+def _after_fork_in_parent() -> None:
+    mask, _fork_masks.mask = getattr(_fork_masks, "mask", None), None
+    if mask is not None:
+        signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+
+
 def _after_fork_in_child() -> None:
     """A forked child (a pool worker) must not write into its parent's wakeup pipe, nor act on
-    the parent's handlers: the default dispositions until the worker sets its own."""
+    the parent's handlers: the default dispositions until the worker sets its own; then the mask
+    it had before the fork (see "Forks" in the module docstring)."""
+    mask, _fork_masks.mask = getattr(_fork_masks, "mask", None), None
+    try:
+        _reset_in_child()
+    finally:
+        if mask is not None:
+            signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+
+
+def _reset_in_child() -> None:
     if not _state.active:
         return
     _state.active = False
     with contextlib.suppress(ValueError, OSError):
         signal.set_wakeup_fd(-1)
+    for fd in _state.fds or ():                # the parent's pipe: its watchdog sees EOF at once
+        with contextlib.suppress(OSError):
+            os.close(fd)
+    _state.fds = None
     for s in SIGNALS:
         with contextlib.suppress(ValueError, OSError):
             signal.signal(s, signal.SIG_DFL)
 
 
 if hasattr(os, "register_at_fork"):
-    os.register_at_fork(after_in_child=_after_fork_in_child)
+    os.register_at_fork(before=_before_fork, after_in_parent=_after_fork_in_parent,
+                        after_in_child=_after_fork_in_child)
 
 
 @contextlib.contextmanager
@@ -179,6 +228,7 @@ def handling():
     read_fd, write_fd = os.pipe()
     os.set_blocking(write_fd, False)
     old_wakeup = signal.set_wakeup_fd(write_fd, warn_on_full_buffer=False)
+    _state.fds = (read_fd, write_fd)
     _state.active = True
     watcher = threading.Thread(target=_watch, args=(read_fd,), name="gnibench-signals",
                                daemon=True)
@@ -194,7 +244,6 @@ def handling():
         signal.set_wakeup_fd(old_wakeup)
         for s, h in previous.items():
             signal.signal(s, h if h is not None else signal.SIG_DFL)
-        os.close(write_fd)                     # the watchdog reads EOF and ends
+        _state.fds = None
+        os.close(write_fd)                     # the watchdog reads EOF, ends, closes read_fd
         watcher.join(timeout=5)
-        with contextlib.suppress(OSError):
-            os.close(read_fd)
