@@ -120,3 +120,16 @@ def test_cli_writes_the_table_and_reports_status(fmt, tmp_path, capsys):
         df = pd.DataFrame(doc["columns"])
     assert df["steps"].tolist() == want_steps
     assert np.all(np.isfinite(df[["p1", "p2", "q1", "q2"]].to_numpy()))
+
+
+def test_a_run_that_fills_its_output_budget_ends_max_rows_with_its_samples(monkeypatch):
+    """A growing output buffer (adaptive steps, a section, a transformed time's grid) stops at the
+    output budget with status ``max_rows``, keeping the rows written: the unplanned rows of a K-S
+    run whose physical time ran away (mutant symplectic-euler-stale-force) grew until the OOM
+    killer ended the pool worker (23 GB). The samples kept are the unbounded run's own."""
+    monkeypatch.setenv("GNIBENCH_MAX_ROWS", "100")
+    capped = solve("kepler-2d", "dopri5:rtol=1e-10,atol=1e-10", t_end=628.0)
+    assert str(capped.status) == "max_rows" and len(capped.t) == 100
+    monkeypatch.delenv("GNIBENCH_MAX_ROWS")
+    whole = solve("kepler-2d", "dopri5:rtol=1e-10,atol=1e-10", t_end=10.0)
+    assert np.array_equal(whole.t[:99], capped.t[:99]) and np.array_equal(whole.y[:99], capped.y[:99])

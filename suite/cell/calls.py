@@ -26,12 +26,24 @@ COUNTERS = 5
 Progress = Callable[[float], None]
 
 
+def row_budget(dim: int) -> int:
+    """The most rows a cell's growing buffers may hold: ``GNIBENCH_MAX_ROWS``, and no more than
+    ``GNIBENCH_MAX_OUTPUT_MB`` of t, y and the counters (:mod:`gnibench.suite.foundation.budgets`,
+    checked before the run for the rows a horizon plans; this bounds the rows it did not plan)."""
+    from gnibench.suite.foundation.budgets import limit
+
+    per_row = 8 * (1 + dim + COUNTERS)
+    return max(2, min(limit("GNIBENCH_MAX_ROWS"), limit("GNIBENCH_MAX_OUTPUT_MB") * 2 ** 20 // per_row))
+
+
 class Buffers:
     """Output buffers of a compiled driver: the rows written so far, and views with room left."""
 
     def __init__(self, rows: int, dim: int, grow: bool):
         self.dim, self.grow, self.chunks = dim, grow, []
-        self._new(max(int(rows), 2))
+        self.before = 0                 # rows in the chunks already full
+        self.cap = row_budget(dim)
+        self._new(max(min(int(rows), self.cap) if grow else int(rows), 2))
 
     def _new(self, rows: int) -> None:
         self.t, self.y = np.empty(rows), np.empty((rows, self.dim))
@@ -46,16 +58,27 @@ class Buffers:
     def advance(self, rows: int) -> None:
         self.row += rows
 
-    def full(self) -> None:
+    def full(self) -> bool:
         """The driver asked for room (BUFFER_FULL): keep what is written, start a new buffer (twice
-        as large when not even one step's rows fitted into an empty one)."""
+        as large when not even one step's rows fitted into an empty one); False, and no new
+        buffer, once the rows would pass :func:`row_budget` (a K-S run whose physical time ran
+        away asked for 10^7 rows in one step and the next buffer doubled until the OOM killer
+        ended the worker)."""
         if not self.grow:
             raise RuntimeError("compiled driver: output buffer too small (sized for the horizon)")
-        size = len(self.t) if self.row else 2 * len(self.t)
+        size = min(len(self.t) if self.row else 2 * len(self.t), self.cap - self.before - self.row)
+        if size <= 0 or (not self.row and size <= len(self.t)):
+            return False                # no room left, or one step needs more than is left
+        self.before += self.row
+        if not self.row:                # nothing written: this buffer is replaced, not kept
+            self.chunks.pop()
+            self._new(size)
+            return True
         kept = Buffers.__new__(Buffers)
         kept.t, kept.y, kept.c = self.t[:self.row], self.y[:self.row], self.c[:self.row]
         self.chunks[-1] = kept
         self._new(size)
+        return True
 
     def arrays(self):
         parts = self.chunks[:-1] + [self]
@@ -83,7 +106,8 @@ def run_driver(call: Callable, buffers: Buffers, fraction: Callable[[], float],
             buffers.advance(int(rows))
             status = Status.from_code(int(code))
             if status is Status.BUFFER_FULL:
-                buffers.full()
+                if not buffers.full():                  # the output budget is spent
+                    return Status.MAX_ROWS, wall
             elif status is not Status.PAUSED:
                 return status, wall
             if progress is not None:

@@ -38,6 +38,10 @@ class Status(str, Enum):
                                       "again with an empty one"), "internal")
     PAUSED = ("paused", 6, ("internal: one call's work budget is spent; the driver is called "
                             "again (progress, Ctrl-C)"), "internal")
+    MAX_ROWS = ("max_rows", None, ("the run filled its output budget (GNIBENCH_MAX_ROWS rows or "
+                                   "GNIBENCH_MAX_OUTPUT_MB of samples) and was stopped: a sampling "
+                                   "grid that a stalled or runaway time keeps filling; the samples so "
+                                   "far are kept"), "failure")
     INTERRUPTED = ("interrupted", None, ("stopped by the user (Ctrl-C); what was finished is "
                                          "kept"), "failure")
     ERROR = ("error", None, ("an unexpected exception inside one cell of a matrix (type and "
