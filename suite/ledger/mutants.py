@@ -257,11 +257,24 @@ def judge_mutant(raw: dict, baseline: dict) -> dict:
 
 def _document(scale: str, claims: list[str], tests: list[str], results: list[dict],
               baseline: dict, planned: int) -> dict:
+    from gnibench.suite.foundation.provenance import versions
+
     killed = sum(r["killed"] for r in results)
     return {"scale": scale, "claims": claims, "tests": tests, "mutants": results,
             "killed": killed, "total": len(results), "planned": planned,
             "complete": len(results) == planned, "date": time.strftime("%Y-%m-%d"),
-            "score": killed / len(results) if results else None, "baseline": baseline}
+            "score": killed / len(results) if results else None, "baseline": baseline,
+            "versions": versions(), "commit": _commit()}
+
+
+def _commit() -> str | None:
+    """The git commit of the package's source tree, when it is a checkout (what was mutated)."""
+    try:
+        out = subprocess.run(["git", "-C", str(package_root()), "rev-parse", "HEAD"], check=False,
+                             capture_output=True, text=True, timeout=30)
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return out.stdout.strip() or None if out.returncode == 0 else None
 
 
 def _write(out: Path, doc: dict) -> None:
