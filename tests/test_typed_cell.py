@@ -101,13 +101,30 @@ def test_method_kind_is_data():
 
 
 def test_no_hand_splitting_of_spec_text_outside_the_spec_module():
-    pattern = re.compile(r"""(partition|split)\(["'][:+]["']""")
+    # split(":"), partition("+"), a modifier looked for as a substring ("+observer" in spec),
+    # an id as a prefix of the spec (method.startswith(...): "symplectic-euler" is a prefix of
+    # "symplectic-euler-adjoint")
+    pattern = re.compile(r"""(partition|split)\(["'][:+]["']|["']\+[a-z]\w*["'] (not )?in """
+                         r"""|\b(method|problem|spec)\.startswith\(""")
     for top in ("suite", "methods", "problems", "reports"):
         for path in (ROOT / top).rglob("*.py"):
             if path.name == "spec.py":
                 continue
             for n, line in enumerate(path.read_text().splitlines(), 1):
                 assert not pattern.search(line), f"{path}:{n}: {line.strip()}"
+
+
+def test_ledger_closed_forms_read_spec_ids_not_prefixes():
+    """pendulum_asymmetry ([HLW] Fig 1.4) takes symplectic Euler and Störmer-Verlet cells by
+    their ids: a symplectic-euler-adjoint cell is refused, not counted as symplectic Euler."""
+    from gnibench.suite.ledger.closed_forms_hlw import pendulum_asymmetry
+
+    t = np.linspace(0.0, 1.0, 5)
+    samples = pd.DataFrame({"cell": [0] * 5, "t": t, "q": np.sin(t), "p": np.cos(t)})
+    cells = pd.DataFrame({"cell": [0], "method": ["symplectic-euler:h=0.3"]})
+    assert set(pendulum_asymmetry(cells, samples)) == {"se"}
+    with pytest.raises(ValueError, match="not symplectic-euler-adjoint"):
+        pendulum_asymmetry(cells.assign(method="symplectic-euler-adjoint:h=0.3"), samples)
 
 
 def test_structure_of_spec_texts():

@@ -28,7 +28,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from gnibench.suite.cell.spec import item_id
+from gnibench.suite.cell.spec import item_id, structure
 from gnibench.suite.ledger import closed_forms_b7, closed_forms_b41, closed_forms_hlw
 from gnibench.suite.ledger.closed_forms_b6 import gs_section_trace
 
@@ -170,8 +170,11 @@ def euler_observer_improvement(cells, samples) -> dict:
     observed run is below plain Euler's everywhere; ``ratio_final`` = their ratio at the end;
     ``ratio_deviation`` = the largest relative deviation of the runs' ratio from the ratio the
     recurrence E_k <- E_k((1 + h s_k)² + h²) predicts (closed form, module docstring)."""
-    plain = [r for r in cells.itertuples() if "+observer" not in r.method]
-    observed = [r for r in cells.itertuples() if "+observer" in r.method]
+    def observes(r) -> bool:
+        return any(m.id == "observer" for m in structure(r.method, "method").modifiers)
+
+    plain = [r for r in cells.itertuples() if not observes(r)]
+    observed = [r for r in cells.itertuples() if observes(r)]
     if len(plain) != 1 or len(observed) != 1:
         raise LookupError("select one plain Euler cell and one Euler + observer cell")
     (p,), (o,) = plain, observed

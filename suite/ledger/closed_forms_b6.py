@@ -64,8 +64,9 @@ def _trace(problem: str, q2: np.ndarray, p2: np.ndarray) -> tuple[np.ndarray, np
     """f and |∇f| of the exact trace H = K = 0 on the section, (q2, p2) coordinates."""
     from gnibench.suite.cell.spec import parse_problem
 
-    values = parse_problem(problem).values
-    B = float(values.get("B", 0.0)) if problem.startswith("gavrilov-shilnikov-modified") else 0.0
+    bound = parse_problem(problem)
+    B = float(bound.values.get("B", 0.0)) if bound.record.id == "gavrilov-shilnikov-modified" \
+        else 0.0
     f = q2**2 - p2**2 + p2**4 / 2 + B * p2**2 * q2**2
     fq = 2 * q2 + 2 * B * p2**2 * q2
     fp = -2 * p2 + 2 * p2**3 + 2 * B * p2 * q2**2
