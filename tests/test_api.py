@@ -219,6 +219,8 @@ def _load_and_solve(defs):
     assert {"oscillator", "heun3", "py-rk4"} <= set(ids)
     listed = gnibench.methods().set_index("id")
     assert listed.loc["py-rk4", "kind"] == "python" and listed.loc["heun3", "kind"] == "compiled"
+    # an order that is not declared is missing (as `gnibench list` says), not order 0
+    assert listed.loc["py-rk4", "order"] == 4 and pd.isna(listed.loc["py-dop853", "order"])
     assert "oscillator" in gnibench.problems()["id"].tolist()
     api = gnibench.solve("oscillator:omega=2", "py-rk4:h=0.05", steps=40, every=10)
     cli = _cli_json_load(defs, ["oscillator:omega=2", "py-rk4:h=0.05", "--steps", "40",

@@ -52,6 +52,7 @@ class PythonMethod(ExternalMethod):
         d = super().describe()
         d["properties"].update(external=False, python=True)
         d["entry"] = self.entry
+        d["order"] = self.order or None             # 0: the entry declares no order
         return d
 
 
