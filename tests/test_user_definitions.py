@@ -167,6 +167,21 @@ def test_cli_refusal_is_one_line_exit_2(tmp_path, capsys):
     assert out == "" and err.count("\n") == 1 and "key 'order'" in err
 
 
+@pytest.mark.parametrize("load, said", [
+    ('["missing.toml"]', "no definitions file"),
+    ('["defs.toml"]', "key 'order': the tableau does not have the declared order 4")])
+def test_an_experiment_s_bad_load_names_the_experiment_and_the_key(tmp_path, capsys, load, said):
+    _defs(tmp_path, GOOD_RK.replace("order = 3", "order = 4"))
+    exp = tmp_path / "exp.toml"
+    exp.write_text(f'name = "x"\ntitle = "x"\nreference = "x"\nload = {load}\nt_end = 1.0\n'
+                   '[[cells]]\nproblems = ["pendulum"]\nmethods = ["rk4"]\n')
+    out = tmp_path / "out"
+    assert main(["run", str(exp), "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith(f"gnibench: error: {exp.name}: load[0]: "), err
+    assert said in err and not out.exists()
+
+
 @pytest.mark.parametrize("text", ["x.real", "os.system('ls')", "[1, 2]", "lambda: 1", "x if x else 1",
                                   "x < 1", "'a'", "f(x)", "sin(x, y)", "sqrt(x=1)", "2^(10^9)",
                                   "x[0]", "1/0", "exp(*x)", "x\n+1"])

@@ -101,7 +101,7 @@ def parse_experiment(text: str, source: str, scale: str = "paper",
     validate(ExperimentFile, doc, source)        # every key, of every scale, before any applies
     stated = scales_stated(doc)
     top = validate(ExperimentFile, at_scale(doc, scale), source)
-    _load(top.load, base)                        # user definitions, before the cells are read
+    _load(top.load, base, source)                # user definitions, before the cells are read
     groups = top.cells
     planned = sum(_planned_cells(g) for g in groups)
     check_count(planned, f"{source}", "GNIBENCH_MAX_CELLS", "cells")
@@ -146,13 +146,16 @@ def _planned_cells(group: Group) -> int:
     return n
 
 
-def _load(paths: list[str], base: Path | None) -> None:
+def _load(paths: list[str], base: Path | None, source: str) -> None:
     """The experiment's user definitions (``load = ["defs.toml"]``, :mod:`gnibench.suite.cell.user`),
-    relative to the experiment file."""
+    relative to the experiment file; an error names the experiment and the key first."""
     from gnibench.suite.cell.user.loader import load
 
-    for p in paths:
-        load(Path(base or ".") / p)
+    for i, p in enumerate(paths):
+        try:
+            load(Path(base or ".") / p)
+        except UserError as e:
+            raise UserError(f"{source}: load[{i}]: {e}") from None
 
 
 def _check_metrics(choices, problems: list, where: str) -> None:
