@@ -182,6 +182,28 @@ def test_an_experiment_s_bad_load_names_the_experiment_and_the_key(tmp_path, cap
     assert said in err and not out.exists()
 
 
+def test_a_large_power_is_not_expanded_to_find_the_explicit_blocks(tmp_path, monkeypatch):
+    """(q + p + 1)^1000 is within the expressions' bounds; its Jacobian entries are nonzero at a
+    point, so sympy's simplify (which expands the power and runs for hours) is never asked."""
+    import sympy as sp
+    from gnibench.problems import REGISTRY
+    from gnibench.problems.codegen import problem_meta, vanishes
+
+    monkeypatch.setenv("GNIBENCH_CACHE_DIR", str(tmp_path / "cache"))
+    loader.load(_defs(tmp_path, OSC.replace("q^2/2", "(q + p + 1)^1000")))
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("simplify asked about an entry that is nonzero at a point")
+
+    monkeypatch.setattr(sp, "simplify", refuse)
+    meta = problem_meta(REGISTRY["osc"])
+    assert meta["explicit_u"] is False and meta["explicit_v"] is False
+    monkeypatch.undo()
+    u, v = sp.symbols("u v", real=True)               # zero only after simplification
+    assert vanishes(sp.diff(v * sp.tan(u) * sp.cos(u) - v * sp.sin(u), u), [u, v])
+    assert not vanishes(sp.diff(v * sp.log(u), u), [u, v])
+
+
 @pytest.mark.parametrize("text", ["x.real", "os.system('ls')", "[1, 2]", "lambda: 1", "x if x else 1",
                                   "x < 1", "'a'", "f(x)", "sin(x, y)", "sqrt(x=1)", "2^(10^9)",
                                   "x[0]", "1/0", "exp(*x)", "x\n+1"])
