@@ -106,6 +106,8 @@ def _judge(claims, dirs, out: Path, a) -> int:
             measured = v.row()["measured_text"]
             print(f"{v.id:<24} {v.verdict:<15} measured {measured or '-':<14} seed: "
                   f"{v.seed_value or '-'}{'  [' + v.figure + ']' if v.figure else ''}{flag}")
+            if v.verdict == "error":                  # why: the entry to fix
+                print(f"{'':<24} {v.detail}")
     if not getattr(a, "no_report", False):
         from gnibench.reports.site import build_site
 
