@@ -182,6 +182,10 @@ def test_sweep_reports_the_closest_point_and_what_fails():
     v = evaluate(_claim(body), _Fake((cells, pd.DataFrame({"cell": [0]}))), {})
     assert v.verdict == "not reproduced" and v.closest.startswith("problem p1")
     assert "off by ×1e+03" in v.closest
+    # partly: the closest is the nearest point that fails, with what fails there
+    v = evaluate(_claim(body.replace("1e-8", "1e-4")), _Fake((cells, pd.DataFrame({"cell": [0]}))),
+                 {})
+    assert v.verdict == "partly" and v.closest.startswith("problem p0") and "e = 0.001" in v.failing
 
 
 def test_the_ledger_page_shows_runs_and_never_presents_agreement_as_evidence():

@@ -357,7 +357,8 @@ def _sweep(v: Verdict, claim: Claim, reader: _Reader) -> Verdict:
             unmeasured.append(f"{claim.sweep} {key}: {e}")
         else:
             _judge(point, claim, values)
-            ranked.append((misses.closeness(point.miss_items), key, point))
+            if point.verdict != "reproduced":   # closest among the points that fail
+                ranked.append((misses.closeness(point.miss_items), key, point))
             points.append((key, f"{point.verdict} ({_text(point.measured)})"))
         v.sweep.append((key, point.verdict))
     v.runs = reader.runs
@@ -366,7 +367,7 @@ def _sweep(v: Verdict, claim: Claim, reader: _Reader) -> Verdict:
                  "not reproduced" if all(s == "not reproduced" for s in verdicts) else "partly")
     v.measured = "; ".join(f"{k}: {m}" for k, m in points)
     v.detail = f"over {claim.sweep}: the seed leaves it open"
-    if unmeasured and not ranked:               # nothing measured at all
+    if unmeasured and len(unmeasured) == len(points):    # nothing measured at all
         v.not_measured = "; ".join(unmeasured)
         v.detail = f"not measured: {v.not_measured}"
     elif unmeasured:
