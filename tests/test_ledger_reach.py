@@ -109,7 +109,53 @@ def test_a_broken_entry_exits_1(tmp_path, capsys, monkeypatch):
     assert main(["verify", "B-9-z", "-o", str(tmp_path / "v"), "--no-report"]) == 1
     captured = capsys.readouterr()
     assert "error" in captured.out and "UNEXPECTED" in captured.out
+    assert "no column 'max_abs_err_H9'" in captured.out          # why, on the console too
     assert "regression record" in captured.err
+
+
+@pytest.mark.parametrize("body", [
+    'values.e = {cells = "", column = "max_abs_err_Q"}\nmeasured = "e"\npasses = "e < 1"\n',
+    'values.e = {cells = "", sample = "err_Q", at = "last"}\nmeasured = "e"\npasses = "e < 1"\n',
+    'values.e = {cells = "", sample = "err_H", at = "stpes=5"}\nmeasured = "e"\npasses = "e < 1"\n',
+    'values.e = {cells = "", column = "max_abs_err_H"}\nmeasured = "e"\npasses = "ee < 1"\n',
+    'values.e = {cells = "", column = "max_abs_err_H"}\nmeasured = "e"\npasses = "e < 1"\n'
+    'partly = "e < 1 and x > 0"\n',
+    'values.e = {cells = "", column = "max_abs_err_H"}\nmeasured = "e"\npasses = "e < 1"\n'
+    'sweep = "problem"\npartly = "f < 2"\n',
+    'closed_form = "no_such_form"\ncells = ""\npasses = "x < 1"\n',
+    'not_checkable = "a swap"\nside.e = {cells = "", column = "max_abs_err_Q"}\n',
+])
+def test_a_typo_is_an_error_even_behind_a_run_that_did_not_complete(body):
+    """The names are checked before the runs' status: a failed run must not hide a typo behind
+    "not measured" (where an entry expects "not measured", the typo would never be noticed)."""
+    v = evaluate(_claim(body), _Fake(_tables("nonfinite", 4.0)), {})
+    assert v.verdict == "error" and v.unexpected, v.detail
+
+
+def test_runs_complete_follows_the_entrys_reach():
+    """A section run that reached its horizon with fewer points than its cap is complete under
+    reach = "horizon" (so(4), [B] §7.2), in the table as in the verdict; an accepted failure is
+    judged but its run is not complete; an aggregate's runs are complete when its parts' are."""
+    tables = _tables(section=500, samples=395)
+    horizon = evaluate(_claim(COLUMN + 'reach = "horizon"\n'), _Fake(tables), {})
+    assert horizon.verdict == "reproduced" and horizon.row()["runs_complete"]
+    assert not evaluate(_claim(COLUMN), _Fake(tables), {}).row()["runs_complete"]
+    body = COLUMN.replace('column = "max_abs_err_H"',
+                          'column = "max_abs_err_H", accept = ["step_too_small"]')
+    accepted = evaluate(_claim(body), _Fake(_tables("step_too_small", 4.0)), {})
+    assert accepted.verdict == "reproduced" and not accepted.row()["runs_complete"]
+    agg = parse_claims('[[claim]]\nid = "B-9-y"\nkind = "E"\ncitation = "t"\nclaim = "x"\n'
+                       'all_of = ["B-9-z"]\n', "t.toml")[0]
+    assert evaluate(agg, _Fake(tables), {"B-9-z": horizon}).row()["runs_complete"]
+    assert not evaluate(agg, _Fake(tables), {"B-9-z": accepted}).row()["runs_complete"]
+
+
+def test_a_near_miss_is_shown_in_percent():
+    """1.994 against ≥ 2 (B-3-b as printed) is off by 0.3 %, not "×1"."""
+    from gnibench.suite.ledger import misses
+
+    assert "(off by 0.3 %)" in misses.describe(misses.failing("m >= 2", {"m": 1.994}))
+    assert "(off by ×4)" in misses.describe(misses.failing("m >= 2", {"m": 0.5}))
 
 
 def test_not_checkable_only_for_entries_that_say_why():
@@ -136,6 +182,10 @@ def test_sweep_reports_the_closest_point_and_what_fails():
     v = evaluate(_claim(body), _Fake((cells, pd.DataFrame({"cell": [0]}))), {})
     assert v.verdict == "not reproduced" and v.closest.startswith("problem p1")
     assert "off by ×1e+03" in v.closest
+    # partly: the closest is the nearest point that fails, with what fails there
+    v = evaluate(_claim(body.replace("1e-8", "1e-4")), _Fake((cells, pd.DataFrame({"cell": [0]}))),
+                 {})
+    assert v.verdict == "partly" and v.closest.startswith("problem p0") and "e = 0.001" in v.failing
 
 
 def test_the_ledger_page_shows_runs_and_never_presents_agreement_as_evidence():
@@ -227,3 +277,4 @@ def test_the_ledger_page_shows_the_mutation_score_and_the_survivors(tmp_path):
     (tmp_path / "mutants.json").write_text(json.dumps(doc))
     md = render_ledger(pd.DataFrame([v.row()]), {"scale": "quick"}, mutation_summary(tmp_path))
     assert "quick scale, 2031\\-01\\-02" in md and "3 of the 5 mutants" in md
+

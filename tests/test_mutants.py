@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 
 import pytest
 from gnibench.suite.foundation.errors import UserError
@@ -87,3 +88,29 @@ def test_the_machinery_kills_a_mutant_at_quick_scale(tmp_path):
     written = json.loads((tmp_path / "mutants.json").read_text())
     assert written["score"] == 1.0 and written["complete"] and written["planned"] == 1
     assert written["date"] == doc["date"] and len(written["date"]) == 10
+
+
+def test_held_out_mutants_from_a_file(tmp_path, capsys):
+    """``gnibench verify --mutants FILE.toml``: held-out mutants in the catalog's schema; a bad
+    file is one line and exit 2 before any work (nothing written); a file outside the package is
+    refused."""
+    from gnibench.suite.cli.main import main
+
+    good = ('[[mutant]]\nid = "h"\nfile = "methods/kernels/newton.py"\noriginal = "x"\n'
+            'replacement = "y"\ndescription = "d"\nplausible = "p"\n')
+    (m,), _ = M.load_catalog(good, "held.toml")
+    assert m.id == "h" and m.file == "methods/kernels/newton.py"
+    for text, why in [(good.replace('plausible = "p"\n', ""), "missing ['plausible']"),
+                      (good + 'severity = 3\n', "unknown keys ['severity']"),
+                      ("[[mutant]\n", "not valid TOML")]:
+        with pytest.raises(UserError, match=re.escape(why)):
+            M.load_catalog(text, "held.toml")
+    outside = M.Mutant("o", "../outside.py", "a", "b", "d", "p")
+    assert "outside the package" in M.check(outside)
+    out = tmp_path / "out"
+    for arg, why in [(str(tmp_path / "none.toml"), "no such file"),
+                     (str(tmp_path / "empty.toml"), "lists no [[mutant]]")]:
+        (tmp_path / "empty.toml").write_text("# nothing\n")
+        assert main(["verify", "--mutants", arg, "-o", str(out)]) == 2
+        err = capsys.readouterr().err
+        assert why in err and len(err.strip().splitlines()) == 1 and not out.exists()

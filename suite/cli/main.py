@@ -141,9 +141,10 @@ def _parser() -> argparse.ArgumentParser:
     v.add_argument("--scheduler", metavar="ADDRESS")
     v.add_argument("--no-report", action="store_true",
                    help="do not write the report site (DIR/report/index.html)")
-    v.add_argument("--mutants", nargs="?", const="all", default=None, metavar="ID,...",
+    v.add_argument("--mutants", nargs="?", const="all", default=None, metavar="ID,...|FILE.toml",
                    help="mutation testing: run the ledger and the catalog's tests on copies of the "
-                        "package with each mutant (or those named) applied; writes DIR/mutants.json")
+                        "package with each mutant (or those named, or those of a TOML file of held-out "
+                        "[[mutant]] entries) applied; writes DIR/mutants.json")
     r.add_argument("--no-report", action="store_true",
                    help="do not write the report (DIR/report/index.html); summary.md is written")
 

@@ -106,6 +106,8 @@ def _judge(claims, dirs, out: Path, a) -> int:
             measured = v.row()["measured_text"]
             print(f"{v.id:<24} {v.verdict:<15} measured {measured or '-':<14} seed: "
                   f"{v.seed_value or '-'}{'  [' + v.figure + ']' if v.figure else ''}{flag}")
+            if v.verdict == "error":                  # why: the entry to fix
+                print(f"{'':<24} {v.detail}")
     if not getattr(a, "no_report", False):
         from gnibench.reports.site import build_site
 
@@ -136,6 +138,14 @@ def mutants_command(a) -> int:
     known = {m.id: m for m in catalog}
     if a.mutants == "all":
         chosen = catalog
+    elif a.mutants.endswith(".toml"):             # held-out mutants, the catalog's schema
+        path = Path(a.mutants)
+        if not path.is_file():
+            raise UserError(f"bad --mutants {a.mutants!r}: no such file; allowed: mutant ids of "
+                            f"the catalog, or a TOML file of [[mutant]] entries")
+        chosen, _ = mutants.load_catalog(path.read_text(encoding="utf-8"), str(path))
+        if not chosen:
+            raise UserError(f"bad --mutants {a.mutants!r}: it lists no [[mutant]]")
     else:
         from gnibench.suite.foundation.errors import unknown
 

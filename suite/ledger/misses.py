@@ -65,7 +65,8 @@ def failing(text: str, values: dict, where: str = "passes") -> list[tuple[str, f
 def describe(items: list[tuple[str, float]]) -> str:
     parts = []
     for text, factor in items:
-        off = f" (off by ×{factor:.3g})" if math.isfinite(factor) and factor > 1 else ""
+        off = "" if not (math.isfinite(factor) and factor > 1) else \
+            f" (off by ×{factor:.3g})" if factor >= 1.1 else f" (off by {100 * (factor - 1):.2g} %)"
         parts.append(text + off)
     return "; ".join(parts)
 

@@ -73,18 +73,36 @@ def catalog_text() -> str:
     return (resources.files("gnibench.suite") / "mutants" / "catalog.toml").read_text("utf-8")
 
 
-def load_catalog(text: str | None = None) -> tuple[list[Mutant], dict]:
-    """The mutants and the settings (``tests``: the test files run against each mutant)."""
-    doc = tomllib.loads(catalog_text() if text is None else text)
+_KEYS = {"id", "file", "original", "replacement", "description", "plausible", "blind_spot", "more"}
+_REQUIRED = ("id", "file", "original", "replacement", "description", "plausible")
+
+
+def load_catalog(text: str | None = None, source: str = "mutant catalog") -> tuple[list[Mutant], dict]:
+    """The mutants and the settings (``tests``: the test files run against each mutant) of the
+    shipped catalog, or of ``text`` (a file of held-out ``[[mutant]]`` entries, same schema)."""
+    try:
+        doc = tomllib.loads(catalog_text() if text is None else text)
+    except tomllib.TOMLDecodeError as e:
+        raise UserError(f"{source}: not valid TOML: {e}") from None
     settings = {k: v for k, v in doc.items() if k != "mutant"}
     mutants, seen = [], set()
-    for entry in doc.get("mutant", []):
+    entries = doc.get("mutant", [])
+    if not isinstance(entries, list):
+        raise UserError(f"{source}: bad mutant; allowed: [[mutant]] entries")
+    for entry in entries:
+        ident = entry.get("id", "?")
+        bad = sorted(set(entry) - _KEYS)
+        missing = [k for k in _REQUIRED if not isinstance(entry.get(k), str) or not entry[k]]
+        if bad or missing:
+            raise UserError(f"{source}: mutant {ident}: " + (f"unknown keys {bad}; " if bad else "")
+                            + (f"missing {missing}; " if missing else "")
+                            + f"allowed: {', '.join(sorted(_KEYS))}")
         if not all(isinstance(p, list) and len(p) == 2 for p in entry.get("more", [])):
-            raise UserError(f"mutant catalog: {entry.get('id')}: more must list [original, "
+            raise UserError(f"{source}: {ident}: more must list [original, "
                             f"replacement] pairs")
         m = Mutant(**{**entry, "more": tuple(tuple(p) for p in entry.get("more", []))})
         if m.id in seen:
-            raise UserError(f"mutant catalog: {m.id} is listed twice")
+            raise UserError(f"{source}: {m.id} is listed twice")
         seen.add(m.id)
         mutants.append(m)
     return mutants, settings
@@ -98,7 +116,10 @@ def package_root() -> Path:
 
 def check(mutant: Mutant, root: Path | None = None) -> str:
     """Why ``mutant`` cannot be applied to the package at ``root`` ("" when it can)."""
-    path = (root or package_root()) / mutant.file
+    base = (root or package_root()).resolve()
+    path = base / mutant.file
+    if base not in path.resolve().parents:
+        return f"{mutant.id}: {mutant.file} is outside the package"
     if not path.is_file():
         return f"{mutant.id}: no file {mutant.file}"
     text = path.read_text(encoding="utf-8")

@@ -57,6 +57,16 @@ class Verdict:
     closest: str = ""                                 # the sweep point that came closest
     needed: str = ""                                  # the entry's words: what would be needed
     miss_items: list = field(default_factory=list)    # (failing conjunct, factor off)
+    horizon_only: bool = False                        # the entry's reach = "horizon"
+    parts: list = field(default_factory=list)         # an aggregate's part verdicts
+
+    @property
+    def runs_complete(self) -> bool:
+        """Every run it read complete by its entry's rule (a section run that reached its horizon
+        is complete under reach = "horizon"; an accepted failure is not complete)."""
+        if self.parts:
+            return all(p.runs_complete for p in self.parts)
+        return all(r.complete(self.horizon_only) for r in self.runs)
 
     @property
     def outcome(self) -> str:
@@ -84,7 +94,7 @@ class Verdict:
                 "reading": self.reading, "detail": self.detail,
                 "sweep": "; ".join(f"{k}: {v}" for k, v in self.sweep),
                 "runs": "\n".join(dict.fromkeys(r.describe() for r in self.runs)),
-                "runs_complete": all(r.status == "ok" and not r.short for r in self.runs),
+                "runs_complete": self.runs_complete,
                 "not_measured": self.not_measured, "failing": self.failing,
                 "closest": self.closest, "needed": self.needed}
 
@@ -156,19 +166,27 @@ class _Reader:
                          horizon_only=self.claim.reach == "horizon")
         return runs
 
+    def names_exist(self, spec: dict) -> None:
+        """KeyError for a column the tables do not have, checked before the runs' status: a
+        typo is an error even where the run it names did not complete."""
+        if "column" in spec and spec["column"] not in self.cells.columns:
+            raise KeyError(f"no column {spec['column']!r} in cells.parquet")
+        if "sample" in spec and spec["sample"] not in self.samples.columns:
+            raise KeyError(f"no column {spec['sample']!r} in samples.parquet")
+        key = spec.get("at", "last").partition("=")[0]
+        if "=" in spec.get("at", "") and key not in self.samples.columns:
+            raise KeyError(f"no sample column {key!r} to read at {spec['at']!r}")
+
     def value(self, spec: dict, restrict=None) -> float:
         chosen = self.chosen(spec["cells"], restrict)
+        self.names_exist(spec)
         runs = self.runs_checked(chosen, spec.get("accept", ()))
         if "column" in spec:
-            if spec["column"] not in chosen.columns:
-                raise KeyError(f"no column {spec['column']!r} in cells.parquet")
             vals = pd.to_numeric(chosen[spec["column"]], errors="coerce").to_numpy(dtype=float)
         else:
             vals = []
             for run in runs:
                 rows = self.samples[self.samples["cell"] == run.cell]
-                if spec["sample"] not in rows.columns:
-                    raise KeyError(f"no column {spec['sample']!r} in samples.parquet")
                 vals.append(at_sample(rows[spec["sample"]].to_numpy(dtype=float), rows,
                                       spec.get("at", "last"), run))
             vals = np.array(vals)
@@ -181,6 +199,8 @@ class _Reader:
 
     def closed_form(self, restrict=None) -> dict:
         chosen = self.chosen(self.claim.cells, restrict)
+        if self.claim.closed_form not in closed_forms.CLOSED_FORMS:
+            raise KeyError(f"unknown closed form {self.claim.closed_form!r}")
         self.runs_checked(chosen)
         return closed_forms.run(self.claim.closed_form, chosen, self.samples)
 
@@ -196,7 +216,8 @@ def evaluate(claim: Claim, results: Results, done: dict[str, Verdict],
     Anything that goes wrong while measuring is the verdict ``error``, with the exception."""
     v = Verdict(claim.id, claim.citation, claim.claim, "not checkable", claim.expected, None,
                 claim.seed_value, claim.threshold, claim.figure, reading=claim.reading,
-                experiment=claim.experiment, needed=claim.needed)
+                experiment=claim.experiment, needed=claim.needed,
+                horizon_only=claim.reach == "horizon")
     try:
         return _evaluate(v, claim, results, done, scale)
     except Exception as e:                     # noqa: BLE001 - a broken entry is a verdict
@@ -224,6 +245,10 @@ def _evaluate(v: Verdict, claim: Claim, results: Results, done: dict, scale: str
     if tables is None:
         raise LookupError(f"experiment {claim.experiment} has no results here")
     reader = _Reader(claim, *tables)
+    if how == "measured":
+        _names_given(claim)
+        for spec in claim.values.values():
+            reader.names_exist(spec)
     if claim.sweep:
         return _sweep(v, claim, reader)
     try:
@@ -233,6 +258,18 @@ def _evaluate(v: Verdict, claim: Claim, results: Results, done: dict, scale: str
         return _not_measured(v, str(e))
     v.runs = reader.runs
     return _judge(v, claim, values)
+
+
+def _names_given(claim: Claim) -> None:
+    """NameError for a name of passes or partly that no value gives, checked before any value is
+    read (a run that did not complete would otherwise hide the typo behind "not measured")."""
+    known = set(claim.values) | {"measured"}
+    for key in ("passes", "partly"):
+        text = getattr(claim, key)
+        unknown = expressions.parse(text, claim.id).names - known if text else set()
+        if unknown:
+            raise NameError(f"{key} uses {', '.join(sorted(unknown))}, which no value gives "
+                            f"(values: {', '.join(sorted(known))})")
 
 
 def _side(v: Verdict, claim: Claim, results: Results) -> None:
@@ -276,6 +313,7 @@ def _aggregate(v: Verdict, claim: Claim, done: dict) -> Verdict:
     for p in parts:
         if p is not None:
             v.runs.extend(p.runs)
+            v.parts.append(p)
     if v.verdict != "reproduced":
         off = [f"{i}: {g}" for i, g in zip(claim.all_of, got) if g != "reproduced"]
         v.failing = "; ".join(off)
@@ -319,7 +357,8 @@ def _sweep(v: Verdict, claim: Claim, reader: _Reader) -> Verdict:
             unmeasured.append(f"{claim.sweep} {key}: {e}")
         else:
             _judge(point, claim, values)
-            ranked.append((misses.closeness(point.miss_items), key, point))
+            if point.verdict != "reproduced":   # closest among the points that fail
+                ranked.append((misses.closeness(point.miss_items), key, point))
             points.append((key, f"{point.verdict} ({_text(point.measured)})"))
         v.sweep.append((key, point.verdict))
     v.runs = reader.runs
@@ -328,7 +367,7 @@ def _sweep(v: Verdict, claim: Claim, reader: _Reader) -> Verdict:
                  "not reproduced" if all(s == "not reproduced" for s in verdicts) else "partly")
     v.measured = "; ".join(f"{k}: {m}" for k, m in points)
     v.detail = f"over {claim.sweep}: the seed leaves it open"
-    if unmeasured and not ranked:               # nothing measured at all
+    if unmeasured and len(unmeasured) == len(points):    # nothing measured at all
         v.not_measured = "; ".join(unmeasured)
         v.detail = f"not measured: {v.not_measured}"
     elif unmeasured:
