@@ -30,7 +30,9 @@ def num(x, fmt: str = ".3g") -> str:
     try:
         v = float(x)
     except (TypeError, ValueError):
-        return str(x)
+        import pandas as pd
+
+        return "–" if x is pd.NA else str(x)          # NA: a count the method did not report
     if math.isnan(v):
         return "–"
     if math.isinf(v):

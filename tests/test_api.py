@@ -228,6 +228,16 @@ def _load_and_solve(defs):
     assert list(api.samples.columns) == list(cli["columns"])
     assert api.samples["nfev"].tolist() == cli["columns"]["nfev"]
     assert api.samples["err_H"].tolist() == cli["columns"]["err_H"]
+    # a Python solver that reports no step count (py-dop853): steps missing after t = 0, not 0
+    argv = ["oscillator", "py-dop853:dt_out=0.5", "--t-end", "2"]
+    api = gnibench.solve("oscillator", "py-dop853:dt_out=0.5", t_end=2.0)
+    assert str(api.samples["steps"].dtype) == "Int64" and api.samples["steps"].iloc[0] == 0
+    assert api.samples["steps"].iloc[1:].isna().all() and len(api.samples) == 5
+    assert _cli_json_load(defs, argv)["columns"]["steps"] == [0.0, None, None, None, None]
+    csv = subprocess.run([sys.executable, "-m", "gnibench.suite.cli.main", "solve", *argv,
+                          "--load", str(defs)], capture_output=True, text=True, check=True).stdout
+    steps = csv.splitlines()[0].split(",").index("steps")
+    assert [line.split(",")[steps] for line in csv.splitlines()[1:]] == ["0", "", "", "", ""]
 
 
 def _cli_json_load(defs, argv) -> dict:

@@ -1,7 +1,7 @@
 """One experiment mixing shipped compiled methods, user methods from a TOML file (a tableau and a
-Python integrator, examples/definitions.toml), a user problem and scipy's solvers (issue 16 item
-5): the same tables, byte for byte, from one process (-j 1), a pool of two (-j 2) and a Dask
-cluster (through the Python API).
+Python step and a Python solver, examples/definitions.toml), a user problem and scipy's solvers
+(issue 16 item 5): the same tables, byte for byte, from one process (-j 1), a pool of two (-j 2)
+and a Dask cluster (through the Python API).
 """
 from __future__ import annotations
 
@@ -30,7 +30,8 @@ methods = ["heun3:h=0.05", "py-rk4:h=0.05"]
 
 [[cells]]
 problems = ["kepler-2d", "pendulum"]
-methods = ["scipy-dop853:dt_out=0.25", "scipy-radau:dt_out=0.25", "scipy-lsoda:dt_out=0.25"]
+methods = ["scipy-dop853:dt_out=0.25", "scipy-radau:dt_out=0.25", "scipy-lsoda:dt_out=0.25",
+           "py-dop853:dt_out=0.25"]
 every = 1
 vary.rtol = [1e-6, 1e-9]
 """
@@ -44,10 +45,21 @@ def test_mixed_matrix_is_byte_identical_across_executors(tmp_path):
     assert main(["run", str(exp), "-o", str(outs["serial"]), "-j", "1", "--no-report"]) == 0
     assert main(["run", str(exp), "-o", str(outs["pool"]), "-j", "2", "--no-report"]) == 0
     res = gnibench.run(exp, output=outs["dask"], executor="dask", jobs=2)
-    assert len(res.cells) == 22 and (res.cells["status"] == "ok").all(), res.cells["reason"]
+    assert len(res.cells) == 26 and (res.cells["status"] == "ok").all(), res.cells["reason"]
     kinds = dict(zip(res.cells["method"].str.split(":").str[0], res.cells["method_kind"]))
-    assert {k: kinds[k] for k in ("rk4", "heun3", "py-rk4", "scipy-radau")} == {
-        "rk4": "compiled", "heun3": "compiled", "py-rk4": "python", "scipy-radau": "external"}
+    assert {k: kinds[k] for k in ("rk4", "heun3", "py-rk4", "scipy-radau", "py-dop853")} == {
+        "rk4": "compiled", "heun3": "compiled", "py-rk4": "python", "scipy-radau": "external",
+        "py-dop853": "python"}
+    # a Python solver that reports no step count: steps missing (null), not 0
+    solver = res.cells["method"].str.startswith("py-dop853:")
+    assert res.cells.loc[solver, "steps"].isna().all() and solver.sum() == 4
+    assert (res.cells.loc[~solver, "steps"] > 0).all()
+    rows = res.samples["method"].str.startswith("py-dop853:")
+    first = res.samples["t"] == 0.0
+    assert str(res.samples["steps"].dtype) == "Int64"
+    assert res.samples.loc[rows & ~first, "steps"].isna().all()
+    assert (res.samples.loc[rows & first, "steps"] == 0).all()
+    assert res.samples.loc[~rows, "steps"].notna().all()
     for table in ("samples.parquet", "cells.parquet"):
         first = (outs["serial"] / table).read_bytes()
         for name in ("pool", "dask"):

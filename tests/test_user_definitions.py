@@ -103,6 +103,29 @@ REFUSED = {
                                        "collides with a shipped one"),
     "collides with a shipped problem": (OSC.replace('"osc"', '"pendulum"'), "problem", 1, "id",
                                         "collides with a shipped one"),
+    "a shipped method's id in capitals": (GOOD_RK.replace('"my-rk"', '"RK4"'), "method", 1, "id",
+                                          "id 'RK4' collides with 'rk4', a shipped one, in all "
+                                          "but letter case"),
+    "a shipped problem's id in capitals": (OSC.replace('"osc"', '"Kepler-2D"'), "problem", 1,
+                                           "id", "id 'Kepler-2D' collides with 'kepler-2d', a "
+                                                 "shipped one, in all but letter case"),
+    "another entry's id in capitals": (GOOD_RK + GOOD_RK.replace('"my-rk"', '"My-RK"'), "method",
+                                       2, "id", "collides with 'my-rk', another entry of this "
+                                                "file, in all but letter case"),
+    "p-first states": (OSC.replace('["q", "p"]', '["p", "q"]'), "problem", 1, "states",
+                       "['p', 'q'] reads p-first ('p' among the q's, 'q' among the p's), which "
+                       "would run the time-reversed flow; list the q's first, or give q = [...] "
+                       "and p = [...]"),
+    "p-first states named px, x": (OSC.replace('["q", "p"]', '["px", "x"]').replace(
+        '"p^2/2 + q^2/2"', '"px^2/2 + x^2/2"').replace("{q = 1, p = 0}", "{x = 1, px = 0}"),
+        "problem", 1, "states", "('px' among the q's, 'x' among the p's)"),
+    "q without p": (OSC + 'q = ["q"]\n', "problem", 1, "p", "give both 'q' and 'p'"),
+    "q and p not the states": (OSC + 'q = ["q"]\np = ["r"]\n', "problem", 1, "q",
+                               "must hold every state of ['q', 'p'] once"),
+    "q and p for a right-hand side": (OSC.replace('hamiltonian = "p^2/2 + q^2/2"',
+                                                  'rhs = {q = "p", p = "-q"}')
+                                      + 'q = ["q"]\np = ["p"]\n', "problem", 1, "q",
+                                      "a right-hand side's blocks are its 'partition'"),
     "failing order condition": (GOOD_RK.replace("order = 3", "order = 4"), "method", 1, "order",
                                 "order 4 condition for tree"),
     "wrong row sum": (GOOD_RK.replace('c = [0, "1/3", "2/3"]', 'c = [0, "1/2", "2/3"]'), "method",
@@ -154,6 +177,10 @@ def test_collision_with_another_file_and_reloading(tmp_path):
     other.write_text(GOOD_RK)
     with pytest.raises(UserError, match=f"collides with the one of {a.resolve()}"):
         loader.load(other)
+    other.write_text(GOOD_RK.replace('"my-rk"', '"MY-RK"'))         # the same but for case
+    with pytest.raises(UserError, match=f"collides with 'my-rk', the one of {a.resolve()}, in "
+                                        f"all but letter case"):
+        loader.load(other)
     a.write_text(GOOD_RK.replace('"my-rk"', '"my-rk-2"'))           # changed: replaces its own
     assert loader.load(a) == ["my-rk-2"]
     with pytest.raises(UserError, match="unknown method 'my-rk'"):
@@ -165,6 +192,55 @@ def test_cli_refusal_is_one_line_exit_2(tmp_path, capsys):
     assert main(["solve", "pendulum", "my-rk", "--steps", "3", "--load", str(path)]) == 2
     out, err = capsys.readouterr()
     assert out == "" and err.count("\n") == 1 and "key 'order'" in err
+
+
+PENDULUM_P_FIRST = """
+[[problem]]
+id = "my-pendulum"
+states = ["p", "q"]                 # as the shipped pendulum lists them
+hamiltonian = "p^2/2 - cos(q)"
+initial = {p = 0, q = 0.5}
+"""
+
+
+def test_a_p_first_hamiltonian_is_refused_or_integrated_as_declared(tmp_path, capsys):
+    """Regression: states = ["p", "q"] was taken as q = p, p = q (the time-reversed flow, no
+    error). Alone it is refused, one line; with q = [...], p = [...] it is the pendulum."""
+    path = _defs(tmp_path, PENDULUM_P_FIRST)
+    assert main(["solve", "my-pendulum", "rk4:h=0.01", "--steps", "3", "--load", str(path)]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1, err
+    assert f"{path.resolve()}: [[problem]] 1 (id 'my-pendulum'), key 'states': " in err
+    path.write_text(PENDULUM_P_FIRST + 'q = ["q"]\np = ["p"]\n')
+    loader.load(path)
+    for method in ("rk4:h=0.01", "stormer-verlet:h=0.01"):      # stormer-verlet: the partition
+        mine = solve("my-pendulum", method, t_end=2.0)
+        shipped = solve("pendulum", method, t_end=2.0)          # (p, q) too, exact solution
+        exact = shipped.reference.y
+        assert mine.y[1, 0] < 0 and exact[1, 0] < 0             # p' = -sin q < 0 at q = 0.5
+        assert np.max(np.abs(mine.y - exact)) < 1e-3, method
+        assert np.array_equal(mine.y, shipped.y), method          # the same field, bit for bit
+
+
+def test_q_and_p_keys_take_the_states_in_any_order(tmp_path):
+    """Two oscillators (frequencies 1 and 2) with states interleaved, exact solution given (the
+    load check of the exact solution holds only with the declared pairs)."""
+    loader.load(_defs(tmp_path, """
+[[problem]]
+id = "two-osc"
+states = ["x", "px", "y", "py"]
+q = ["x", "y"]
+p = ["px", "py"]
+hamiltonian = "px^2/2 + py^2/2 + x^2/2 + 2*y^2"
+initial = {x = 1, px = 0, y = 1, py = 0}
+exact = {x = "cos(t)", px = "-sin(t)", y = "cos(2*t)", py = "-2*sin(2*t)"}
+"""))
+    from gnibench.problems import REGISTRY
+
+    assert REGISTRY["two-osc"].canonical == (("px", "py"), ("x", "y"))
+    for method, tol in (("rk4:h=0.01", 1e-7), ("stormer-verlet:h=0.01", 1e-3)):
+        traj = solve("two-osc", method, t_end=3.0)
+        assert np.max(np.abs(traj.y - traj.reference.y)) < tol, method
 
 
 @pytest.mark.parametrize("load, said", [

@@ -35,8 +35,9 @@ class EngineRun:
     """What an engine gives back on a sample grid.
 
     ``y`` is float64; ``y_full`` the same samples in the working precision (None for double).
-    ``steps`` is cumulative per sample; ``nfev`` cumulative force evaluations, NaN where the
-    engine does not expose them; ``njev`` cumulative Jacobian evaluations (None: the engine
+    ``steps`` is cumulative per sample (integers; float NaN where the engine does not report
+    them, as a user's Python solver may not); ``nfev`` cumulative force evaluations, NaN where
+    the engine does not expose them; ``njev`` cumulative Jacobian evaluations (None: the engine
     evaluates none). ``status`` is a Status value (``ok``, ``nonfinite``, ...); after a failure
     only the samples reached are kept.
     """

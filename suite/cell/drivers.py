@@ -50,9 +50,10 @@ def build_trajectory(problem: Bound, method, t, y, counters, status: Status, rea
     t = np.ascontiguousarray(t, dtype=np.float64)
     y = np.ascontiguousarray(y, dtype=np.float64).reshape(len(t), rec.dim)
     c = np.asarray(counters, dtype=np.float64).reshape(len(t), -1)
+    steps = c[:, 0].astype(np.int64) if np.isfinite(c[:, 0]).all() else c[:, 0].copy()
     return Trajectory(
         problem=problem.text(), method=method.text(), state_names=rec.state, t=t, y=y,
-        steps=c[:, 0].astype(np.int64), nfev=c[:, 1].copy(), njev=c[:, 2].copy(),
+        steps=steps, nfev=c[:, 1].copy(), njev=c[:, 2].copy(),
         rejected=c[:, 3].copy(), integral_names=pk.integral_names, integrals=pk.integrals(y),
         H0=pk.at(y0), y0=y0, status=status, reason=reason, kind=kind, chart=chart,
         provenance=provenance)

@@ -45,7 +45,8 @@ class Trajectory:
         Jacobian evaluations, rejected steps (adaptive methods). ``nfev`` is NaN where an engine
         does not expose it (heyoka, IAS15). It includes the partial steps of a time grid and the
         locators' evaluations of section crossings (whose counters are those of the step that
-        holds the crossing).
+        holds the crossing). ``steps`` is int64, or float64 with NaN where the method does not
+        report it (a user's Python solver: missing in the tables).
     integral_names, integrals, H0:
         The problem's first integrals I_k(y) at every sample, and I_k(y0).
     status, reason:

@@ -81,7 +81,9 @@ def _describe(o) -> str:
     c, timing = o.cell, o.timing
     line = f"cell {c.id}: {c.problem} {c.method}: {o.status}"
     if o.status != "error":
-        line += (f", {o.row['steps']} steps, compile/load {timing['compile_seconds']:.2f} s, "
+        steps = o.row["steps"]                  # None: a Python solver that reports none
+        steps = "steps not reported" if steps is None else f"{steps} steps"
+        line += (f", {steps}, compile/load {timing['compile_seconds']:.2f} s, "
                  f"run {timing['wall_seconds'] * 1e3:.3g} ms")
     return line + (f" ({o.reason})" if o.reason else "")
 

@@ -24,15 +24,25 @@ def sample_frame(traj, metrics) -> pd.DataFrame:
     """The table of one cell (see :func:`sample_columns`)."""
     import pandas as pd
 
-    return pd.DataFrame(sample_columns(traj, metrics))
+    return missing_steps(pd.DataFrame(sample_columns(traj, metrics)))
+
+
+def missing_steps(df: pd.DataFrame) -> pd.DataFrame:
+    """``steps`` as nullable integers (pandas Int64: empty in csv, null in Parquet) where some
+    are missing (NaN: a Python solver that reports no count, or section rows), else int64."""
+    if "steps" in df.columns and df["steps"].dtype.kind == "f":
+        df["steps"] = df["steps"].astype("Int64")
+    return df
 
 
 def sample_columns(traj, metrics) -> dict[str, np.ndarray]:
     """The table of one cell: its samples and the per-sample metric columns.
 
     Samples: ``t``, the states, ``err_<I>``, ``global_error``, ``steps``, ``nfev``, then the
-    columns of the chosen metrics. Section crossings: ``crossing``, ``t``, ``chart`` (multi-chart
-    sections), the section's coordinates, the other states, ``err_<I>``, then the chosen metrics.
+    columns of the chosen metrics (``steps`` NaN where the method reports none:
+    :func:`missing_steps` makes it a nullable integer in a DataFrame). Section crossings:
+    ``crossing``, ``t``, ``chart`` (multi-chart sections), the section's coordinates, the other
+    states, ``err_<I>``, then the chosen metrics.
     """
     cols = dict(metrics.columns)
     errors = {k: cols.pop(k) for k in list(cols) if k.startswith("err_")}
@@ -110,8 +120,9 @@ def cell_row(cell, traj=None, metrics=None, status: str = "pending", reason: str
     if traj is None:
         return row
     last = len(traj.t) - 1
+    step = traj.steps[last] if last >= 0 else 0
     row.update(status=str(traj.status), reason=traj.reason,
-               steps=int(traj.steps[last]) if last >= 0 else 0,
+               steps=int(step) if np.isfinite(step) else None,     # None: not reported
                t_final=float(traj.t[last]) if last >= 0 else np.nan,
                nfev=float(traj.nfev[last]) if last >= 0 else np.nan,
                njev=float(traj.njev[last]) if last >= 0 else np.nan, samples=len(traj.t),
@@ -161,7 +172,7 @@ def samples_table(parts: list[tuple[pd.DataFrame, tuple[str, ...]]],
     tail = ["global_error"] if "global_error" in df.columns else []
     rest = [c for c in df.columns if c not in SAMPLE_FRONT and c not in states
             and c not in errors and c not in tail]
-    return df[list(SAMPLE_FRONT) + states + errors + tail + rest]
+    return missing_steps(df[list(SAMPLE_FRONT) + states + errors + tail + rest].copy())
 
 
 _CELL_COLUMNS = ("cell", "group", "label", "problem", "method", "method_kind", "h", "t_end", "steps_planned",

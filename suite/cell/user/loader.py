@@ -11,8 +11,9 @@
 Every record carries its :class:`Origin` (the file's path and text, or the entry point), so a
 worker process that lacks it (a Dask worker started by spawn) defines it before resolving a
 pickled reference (:mod:`gnibench.suite.foundation.registries`). A user id that collides with a
-shipped id, or with one of another origin, is refused; loading the same file again is a no-op,
-and a changed file replaces its own earlier definitions.
+shipped id, or with one of another origin, also when they differ only in letter case, is
+refused; loading the same file again is a no-op, and a changed file replaces its own earlier
+definitions.
 """
 from __future__ import annotations
 
@@ -202,15 +203,21 @@ def _register(origin: Origin, digest: str, tables: list[Entry]) -> list[str]:
     for e in tables:
         rid = e.ident()
         taken = {"problem": (REGISTRY, INTERNAL), "method": (METHODS, ALIASES, MODIFIERS)}[e.kind]
-        owner = next((r for r in taken if rid in r), None)
-        if owner is not None or (e.kind, rid) in built:
-            record = owner.get(rid) if isinstance(owner, dict) else None
+        mine = [b for k, b in built if k == e.kind]
+        names = [i for r in (*taken, mine) for i in r]
+        clash = rid if rid in names else next(      # or one in another letter case: RK4, rk4
+            (i for i in names if i.casefold() == rid.casefold()), None)
+        if clash is not None:
+            owner = next((r for r in taken if clash in r), None)
+            record = owner.get(clash) if isinstance(owner, dict) else None
             where = getattr(record, "origin", None)
             what = f"the one of {where}" if where is not None else "a shipped one"
-            if (e.kind, rid) in built:
+            if clash in mine:
                 what = "another entry of this file"
+            if clash != rid:
+                what = f"{clash!r}, {what}, in all but letter case"
             raise e.error("id", f"{e.kind} id {rid!r} collides with {what}; allowed: an id that "
-                                f"is not taken (gnibench list {e.kind}s)")
+                                f"is not taken, in any letter case (gnibench list {e.kind}s)")
         record = build_problem(e, origin) if e.kind == "problem" else build_method(e, origin, known)
         built[(e.kind, rid)] = record
     for (kind, rid), record in built.items():

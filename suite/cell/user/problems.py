@@ -4,6 +4,8 @@ Keys (README, "User definitions")::
 
     id, title, reference, notes        # id required; the others text
     states = ["q", "p"]                # names; a Hamiltonian problem lists its q's, then its p's
+    q = ["q"], p = ["p"]               # optional, Hamiltonian only: which states are q's and p's
+                                       # (p[i] the momentum of q[i]); then states in any order
     hamiltonian = "p^2/2 - cos(q)"     # either this ...
     rhs = {x = "a*x - x*y", y = "..."} # ... or the right-hand side of every state
     integrals = {L = "..."}            # first integrals (H is added for a Hamiltonian problem)
@@ -29,8 +31,8 @@ from gnibench.suite.cell.user.entries import Entry
 from gnibench.suite.cell.user.expressions import CONSTANTS, FUNCTIONS
 from gnibench.suite.foundation.params import Param
 
-KEYS = ("id", "title", "reference", "notes", "states", "hamiltonian", "rhs", "integrals",
-        "parameters", "initial", "period", "exact", "partition")
+KEYS = ("id", "title", "reference", "notes", "states", "q", "p", "hamiltonian", "rhs",
+        "integrals", "parameters", "initial", "period", "exact", "partition")
 RESERVED = set(FUNCTIONS) | set(CONSTANTS) | {"t"}
 
 
@@ -40,7 +42,8 @@ def build_problem(e: Entry, origin) -> Problem:
 
     e.keys(KEYS)
     pid = e.ident()
-    states = e.names("states")
+    pairs = _pairs(e)
+    states = e.names("states", required=pairs is None) or list(pairs[0] + pairs[1])
     params = e.table_of("parameters")
     for name in list(states) + list(params):
         if name in RESERVED or keyword.iskeyword(name):
@@ -57,11 +60,8 @@ def build_problem(e: Entry, origin) -> Problem:
         raise e.error(None, "give exactly one of the keys 'hamiltonian' and 'rhs'")
     canonical = partition = None
     if "hamiltonian" in e.table:
-        if len(states) % 2:
-            raise e.error("states", "a Hamiltonian problem has an even number of states (q's, "
-                                    "then p's)")
-        half = len(states) // 2
-        canonical = (tuple(states[half:]), tuple(states[:half]))
+        qs, ps = canonical_names(e, states, pairs)
+        canonical = (ps, qs)
         hamiltonian = e.text("hamiltonian")
         e.expr("hamiltonian", hamiltonian, syms)
         texts = {"H": hamiltonian}
@@ -72,6 +72,9 @@ def build_problem(e: Entry, origin) -> Problem:
                                  f"{', '.join(rhs)}")
         for s, text in rhs.items():
             e.expr(f"rhs.{s}", text, syms)
+        if pairs is not None:
+            raise e.error("q", "the keys 'q' and 'p' name the canonical pairs of a Hamiltonian; "
+                               "a right-hand side's blocks are its 'partition'")
         texts = {}
         partition = _partition(e, states)
     integrals = {}
@@ -112,6 +115,57 @@ def build_problem(e: Entry, origin) -> Problem:
                                                                    init, pid)),
         notes=e.text("notes", "", one_line=False), origin=origin,
         definition=json.dumps({"source": e.source, "entry": e.table}, sort_keys=True, default=str))
+
+
+def _pairs(e: Entry):
+    """The keys ``q`` and ``p`` (both or neither): (q names, p names), or None."""
+    if ("q" in e.table) != ("p" in e.table):
+        raise e.error("q" if "p" in e.table else "p", "missing: give both 'q' and 'p' (the "
+                                                       "canonical pairs, p[i] the momentum of q[i])")
+    if "q" not in e.table:
+        return None
+    qs, ps = e.names("q"), e.names("p")
+    if len(qs) != len(ps):
+        raise e.error("p", f"{len(ps)} name(s) for {len(qs)} q's; allowed: one momentum per q")
+    both = set(qs) & set(ps)
+    if both:
+        raise e.error("p", f"{sorted(both)[0]!r} is both a q and a p")
+    return tuple(qs), tuple(ps)
+
+
+def _momentum_like(name: str) -> bool:
+    return name[:1] in "pP"
+
+
+def _position_like(name: str, momenta) -> bool:
+    """A name that reads as a q: q…/Q…, or a momentum's name without its p (px -> x)."""
+    return name[:1] in "qQ" or any(name in (m[1:], m[1:].lstrip("_")) for m in momenta)
+
+
+def canonical_names(e: Entry, states, pairs) -> tuple[tuple, tuple]:
+    """(q names, p names) of a Hamiltonian entry: its keys ``q`` and ``p``, which must hold every
+    state once, else the first half of ``states`` and the second. Without ``q``/``p``, a list
+    that reads p-first (a first-half name p…/P… and a second-half name q…/Q… or that momentum's
+    name without its p) is refused: taken as written it would integrate the time-reversed flow."""
+    if pairs is not None:
+        qs, ps = pairs
+        if sorted(qs + ps) != sorted(states):
+            raise e.error("q", f"q = {list(qs)} and p = {list(ps)} must hold every state of "
+                               f"{list(states)} once")
+        return qs, ps
+    if len(states) % 2:
+        raise e.error("states", "a Hamiltonian problem has an even number of states (q's, "
+                                "then p's)")
+    half = len(states) // 2
+    first, second = states[:half], states[half:]
+    momenta = [s for s in first if _momentum_like(s)]
+    positions = [s for s in second if _position_like(s, momenta)]
+    if momenta and positions:
+        raise e.error("states", f"{list(states)} reads p-first ({momenta[0]!r} among the q's, "
+                                f"{positions[0]!r} among the p's), which would run the "
+                                f"time-reversed flow; list the q's first, or give q = [...] and "
+                                f"p = [...]")
+    return tuple(first), tuple(second)
 
 
 def _partition(e: Entry, states):
@@ -314,7 +368,9 @@ def _field(e: Entry, states, syms) -> list:
 
     if "hamiltonian" in e.table:
         H = e.expr("hamiltonian", e.table["hamiltonian"], syms)
-        half = len(states) // 2
-        q, p = states[:half], states[half:]
-        return [sp.diff(H, syms[x]) for x in p] + [-sp.diff(H, syms[x]) for x in q]
+        q, p = canonical_names(e, states, _pairs(e))
+        deriv = {}
+        for qi, pi in zip(q, p):                    # [HLW] (1.10): q' = H_p, p' = -H_q
+            deriv[qi], deriv[pi] = sp.diff(H, syms[pi]), -sp.diff(H, syms[qi])
+        return [deriv[s] for s in states]
     return [e.expr(f"rhs.{s}", e.table["rhs"][s], syms) for s in states]

@@ -10,8 +10,9 @@ Two kinds of ``[[method]]`` (README, "User definitions"):
   integration returning the samples at ``t_eval`` (an array of shape (len(t_eval), N), or a
   dict with ``y`` and optionally ``nfev``, ``steps``, ``status`` ("ok" or a failure) and
   ``message``). Like an adaptive engine it samples the grid t = k dt_out. ``nfev`` (counted
-  through the wrapper, or as reported) and ``steps`` (as reported, else 0) are known only at the
-  end: the earlier samples carry NaN and 0.
+  through the wrapper, or as reported) and ``steps`` (as reported) are known only at the end:
+  the samples after the first carry NaN (missing in the tables), and so does the last one's
+  ``steps`` when the solver reports none.
 
 ``f(t, y)`` is the problem's compiled vector field (:mod:`gnibench.problems.codegen`), called
 from Python. An exception in the user's code, a wrong shape or a non-finite state ends the cell
@@ -159,9 +160,12 @@ def _state(value, n: int) -> np.ndarray:
     return y
 
 
-def _count(result: dict, key: str) -> int:
-    """The solver's count ``key`` (a non-negative integer; a ValueError otherwise)."""
-    value = result.get(key, 0)
+def _count(result: dict, key: str) -> int | None:
+    """The solver's count ``key`` (a non-negative integer; None when it reports none; a
+    ValueError otherwise)."""
+    value = result.get(key)
+    if value is None:
+        return None
     if isinstance(value, bool) or not isinstance(value, (int, np.integer, float)) or \
             not 0 <= value < 2 ** 62 or int(value) != value:
         raise ValueError(f"returned {key} = {value!r}; expected a count (an integer >= 0)")
@@ -234,7 +238,7 @@ def solver(entry: str, base: str, code: str = ""):
         t_eval = np.array(grid.t, dtype=float)
         y0 = np.array(problem.record.y0(problem.values), dtype=float)
         setup = time.perf_counter() - t0
-        status, reason, steps, reported = "ok", "", 0, None
+        status, reason, steps, reported = "ok", "", None, None
         t1 = time.perf_counter()
         try:
             result = solve(f, y0.copy(), (0.0, float(t_eval[-1])), t_eval.copy(),
@@ -242,8 +246,7 @@ def solver(entry: str, base: str, code: str = ""):
             if isinstance(result, dict):
                 status = str(result.get("status", "ok"))
                 reason = "" if status == "ok" else str(result.get("message", ""))
-                steps, reported = _count(result, "steps"), result.get("nfev")
-                reported = None if reported is None else _count(result, "nfev")
+                steps, reported = _count(result, "steps"), _count(result, "nfev")
                 result = result["y"]
             y = np.asarray(result, dtype=float)
             if y.ndim != 2 or y.shape[1] != n or len(y) > len(t_eval):
@@ -263,13 +266,14 @@ def solver(entry: str, base: str, code: str = ""):
         if not len(y):                  # nothing usable: the initial point, as a failed call
             y = y0[None, :]
         rows = len(y)
-        nfev, counts = np.full(rows, np.nan), np.zeros(rows, dtype=np.int64)
-        nfev[0] = 0.0
+        nfev, counts = np.full(rows, np.nan), np.full(rows, np.nan)   # NaN: not known there
+        nfev[0] = counts[0] = 0.0
         if rows > 1:
             nfev[-1] = float(count[0] if reported is None else reported)
-            counts[-1] = steps
+            counts[-1] = np.nan if steps is None else float(steps)
         info = {"engine": "python", "entry": entry, "steps": "as reported by the solver (last "
-                "sample)", "nfev": "calls of f, or as reported (last sample)"}
+                "sample; missing when it reports none)", "nfev": "calls of f, or as reported "
+                "(last sample)"}
         return EngineRun(y=y, y_full=None, steps=counts, nfev=nfev, status=status, reason=reason,
                          setup_seconds=setup, seconds=seconds, info=info)
 
