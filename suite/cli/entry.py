@@ -35,6 +35,14 @@ def _end(code: int) -> None:
     os._exit(code)
 
 
+def _last_signal() -> int:
+    """The signal that ended the command: the one the command's own handlers saw last
+    (:mod:`gnibench.suite.cli.signals`), else the one these early handlers saw, else SIGINT."""
+    signals = sys.modules.get("gnibench.suite.cli.signals")
+    seen = getattr(getattr(signals, "_state", None), "received", None)
+    return seen or (_received[-1] if _received else signal.SIGINT)
+
+
 def main() -> int:
     try:
         from gnibench.suite.cli.main import main as command
@@ -48,7 +56,7 @@ def main() -> int:
             _end(128 + _received[-1])
         code = command()
     except KeyboardInterrupt:               # a signal between the command's end and here
-        code = 128 + (_received[-1] if _received else signal.SIGINT)
+        code = 128 + _last_signal()
     _end(code)
     return code                             # not reached
 

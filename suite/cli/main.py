@@ -298,8 +298,13 @@ def main(argv=None) -> int:
     fault during work such as a full disk), 2 (bad input), 130/143 (SIGINT/SIGTERM)."""
     from gnibench.suite.cli import signals, streams
 
-    with signals.handling(), streams.tolerant():
-        return _main(argv)
+    try:
+        with signals.handling(), streams.tolerant():
+            return _main(argv)
+    except KeyboardInterrupt:       # a signal between the handlers' start and _main's own try
+        signals.quiet()
+        print(f"gnibench: {signals.message()}", file=sys.stderr)
+        return signals.exit_code()
 
 
 def _main(argv) -> int:
