@@ -215,6 +215,26 @@ def test_report_to_an_existing_file_or_a_read_only_place(results, tmp_path, caps
     assert taken.read_text() == "not a directory"
 
 
+def test_disk_full_while_writing_a_report_page_is_one_line_naming_it(results, tmp_path, capsys,
+                                                                    monkeypatch):
+    """ENOSPC in a page of ``gnibench report``: one line naming the page, no half-written page
+    (it was 'gnibench: error: No space left on device', naming nothing)."""
+    real = Path.write_text
+
+    def write_text(self, text, *a, **k):
+        if self.name.startswith(".index.html"):
+            real(self, text[:10], *a, **k)
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return real(self, text, *a, **k)
+
+    monkeypatch.setattr(Path, "write_text", write_text)
+    site = tmp_path / "site"
+    code, _out, err = run(["report", str(results), "-o", str(site)], capsys)
+    err = "\n".join(ln for ln in err.splitlines() if not ln.startswith("gnibench: report:"))
+    assert str(site / "index.html") in one_error_line(code, err, status=1)
+    assert not (site / "index.html").exists() and not list(site.glob(".index.html*"))
+
+
 @pytest.mark.parametrize("damage", ["truncate", "garbage", "empty"])
 def test_report_of_a_damaged_table_is_one_line(results, tmp_path, capsys, damage):
     import shutil

@@ -88,6 +88,10 @@ def atomic_write(path: Path, write) -> None:
     try:
         write(tmp)
         _replace(tmp, path)
+    except OSError as e:              # a full disk, say: the error names the file
+        if not e.filename:
+            e.filename = str(path)
+        raise
     finally:
         if tmp.exists():
             tmp.unlink()
