@@ -196,6 +196,38 @@ def test_disk_full_during_a_run_keeps_the_stored_cells_and_a_rerun_completes(tmp
         assert (full / name).read_bytes() == (whole / name).read_bytes()
 
 
+def test_a_fresh_run_stopped_early_counts_its_stored_cells_and_says_drop_fresh(tmp_path, capsys,
+                                                                             monkeypatch):
+    """A signal between a cell's commit and its read-back: the cell is stored and counted (it was
+    left out of 'k of n cells are stored'); after --fresh the advice is to run again without it
+    (the same command would ignore what was stored)."""
+    from gnibench.suite.runs import store
+
+    exp = tmp_path / "tiny.toml"
+    exp.write_text(TINY)
+    real = store.Store.read
+    computed = []
+
+    def read(self, key):
+        if key in computed and len(computed) == 1:   # the read-back of the first cell stored
+            computed.append("interrupted")
+            raise KeyboardInterrupt
+        return real(self, key)
+
+    def write(self, key, part, empty, real_write=store.Store.write):
+        real_write(self, key, part, empty)
+        computed.append(key)
+
+    monkeypatch.setattr(store.Store, "read", read)
+    monkeypatch.setattr(store.Store, "write", write)
+    code = main(["run", str(exp), "-o", str(tmp_path / "out"), "-j", "1", "--no-report",
+                 "--fresh"])
+    err = capsys.readouterr().err
+    assert code == 130 and "1 of 4 cells are stored" in err, err
+    assert "run it again without --fresh" in err
+    assert len(list((tmp_path / "out" / "parts").glob("*.parquet"))) == 1
+
+
 # ---- report and bench -------------------------------------------------------------------------
 
 @pytest.fixture(scope="module")

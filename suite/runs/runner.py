@@ -131,6 +131,8 @@ def run_experiments(experiments: list[Experiment], outs: list[Path], store_root:
         print(f"gnibench: {name}: {len(unique)} cells -> {where} ({len(done)} reused from the "
               f"store, {len(todo)} to compute)", file=log, flush=True)
         progress = RunProgress(len(unique), len(done), log, name)
+        # --fresh again would ignore what this run stores
+        again = "run it again without --fresh" if fresh else "run the same command again"
         # the pool's workers get their first cells now; the tables' writers are made meanwhile
         outcomes = executors.run(_groups(todo), executor, jobs, scheduler, progress.cell_progress,
                                  pool)
@@ -142,10 +144,10 @@ def run_experiments(experiments: list[Experiment], outs: list[Path], store_root:
                 for outcome in outcomes:
                     key = key_of.get(id(outcome.cell)) or cell_key(outcome.cell)
                     store.write(key, _part(outcome), writers[0].empty_samples)
+                    done.add(key)         # stored: counted even if a signal comes right now
                     # read back (verified) while the workers go on: the tables at the end are
                     # made from the disk's parts without waiting for the disk
                     store.read(key)
-                    done.add(key)
                     progress.cell_done(outcome)
                     for w in writers:      # only the experiments that hold the cell have news
                         if key in w.key_set:
@@ -160,13 +162,11 @@ def run_experiments(experiments: list[Experiment], outs: list[Path], store_root:
                 for w in writers:
                     w.flush(done)
             print(f"gnibench: interrupted: {len(done)} of {len(unique)} cells are stored in "
-                  f"{store_root}; run the same command again to compute the rest", file=log,
-                  flush=True)
+                  f"{store_root}; {again} to compute the rest", file=log, flush=True)
             raise
         except OSError as e:          # the disk filled up, say: what is stored stays
             raise fault(e, "the run", f"{len(done)} of {len(unique)} cells are stored in "
-                        f"{store_root}; run the same command again once the cause is "
-                        f"removed") from None
+                        f"{store_root}; {again} once the cause is removed") from None
         finally:
             progress.close()
     return outs
