@@ -106,6 +106,46 @@ def test_budget_variables_accept_exponents(capsys, monkeypatch):
     assert run(["solve", OSC, "rk4:h=0.1", "--steps", "1000"], capsys)[0] == 0
 
 
+def test_disabled_jit_is_refused_before_work(capsys, monkeypatch, tmp_path):
+    """NUMBA_DISABLE_JIT=1 made every cell of a run end in error (stored, and reused by the next
+    run without it) and a solve a traceback."""
+    monkeypatch.setenv("NUMBA_DISABLE_JIT", "1")
+    out = tmp_path / "out"
+    for argv in (SOLVE, ["run", "quick", "-o", str(out), "-j", "1"]):
+        code, _out, err = run(argv, capsys)
+        assert "NUMBA_DISABLE_JIT" in one_error_line(code, err)
+    assert not out.exists()
+    monkeypatch.setenv("NUMBA_DISABLE_JIT", "0")
+    assert run(SOLVE, capsys)[0] == 0
+
+
+def test_cells_that_ended_in_error_are_computed_again(tmp_path, capsys, monkeypatch):
+    """An unexpected failure is not a result of a cell's inputs: the next run computes the cell
+    again (the tables then hold the new part, not the one in error read at the start)."""
+    from gnibench.suite.cell import solve
+
+    exp = tmp_path / "tiny.toml"
+    exp.write_text(TINY)
+    out = tmp_path / "out"
+    real = solve.solve_cell
+
+    def broken(spec, **k):
+        if spec.problem.record.id == "pendulum":
+            raise MemoryError("out of memory")
+        return real(spec, **k)
+
+    monkeypatch.setattr(solve, "solve_cell", broken)
+    assert main(["run", str(exp), "-o", str(out), "-j", "1", "--no-report"]) == 0
+    cells = pd.read_parquet(out / "cells.parquet")
+    assert sorted(cells["status"]) == ["error", "error", "ok", "ok"]
+    monkeypatch.setattr(solve, "solve_cell", real)
+    capsys.readouterr()
+    assert main(["run", str(exp), "-o", str(out), "-j", "1", "--no-report"]) == 0
+    err = capsys.readouterr().err
+    assert "(2 reused from the store, 2 to compute, 2 of them ended in error before)" in err
+    assert list(pd.read_parquet(out / "cells.parquet")["status"]) == ["ok"] * 4
+
+
 # ---- output files: regular files only ----------------------------------------------------------
 
 def test_fifo_and_symlink_outputs_are_refused_and_left_alone(tmp_path, capsys):
@@ -322,6 +362,26 @@ def test_a_reader_that_stops_reading_ends_nothing(argv):
     err = p.stderr.read().decode()
     assert p.wait(timeout=300) == 0, err
     assert first and err == ""
+
+
+def _closing(*fds):
+    return lambda: [os.close(fd) for fd in fds]
+
+
+def test_closed_standard_streams(tmp_path):
+    """``>&-`` and ``2>&-``: a solve to a closed stdout is refused before work (exit 2; it was a
+    traceback after the work), one with -o completes; a closed stderr is silence, the exit code
+    still says what happened (a traceback at the end made every code 1)."""
+    p = subprocess.run([GNIBENCH, *SOLVE], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                       text=True, timeout=300, check=False, preexec_fn=_closing(1))
+    assert "stdout is closed" in one_error_line(p.returncode, p.stderr)
+    out = tmp_path / "x.csv"
+    p = subprocess.run([GNIBENCH, *SOLVE, "-o", str(out)], stderr=subprocess.PIPE, text=True,
+                       timeout=300, check=False, preexec_fn=_closing(1, 2))
+    assert p.returncode == 0 and out.read_text().startswith("t,")
+    p = subprocess.run([GNIBENCH, "solve", OSC, "rk4:h=-1", "--steps", "10"], timeout=300,
+                       check=False, preexec_fn=_closing(2))
+    assert p.returncode == 2
 
 
 def test_a_run_goes_on_when_its_progress_reader_goes_away(tmp_path):

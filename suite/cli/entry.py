@@ -25,12 +25,26 @@ def _early(signum, frame):
 for _s in (signal.SIGINT, signal.SIGTERM):
     signal.signal(_s, _early)
 
+# A standard stream closed by the caller (``>&-``, ``2>&-``) is /dev/null at its descriptor: else
+# the next file opened would get descriptor 1 or 2 and whatever writes there (numba, a worker)
+# would write into a result file. Python has set sys.stdout or sys.stderr to None already, so a
+# command still knows: stdout closed is refused (streams.py), stderr closed is silence.
+for _fd, _mode in ((0, os.O_RDONLY), (1, os.O_WRONLY), (2, os.O_WRONLY)):
+    try:
+        os.fstat(_fd)
+    except OSError:
+        _null = os.open(os.devnull, _mode)
+        if _null != _fd:
+            os.dup2(_null, _fd)
+            os.close(_null)
+        os.set_inheritable(_fd, True)
+
 
 def _end(code: int) -> None:
     for stream in (sys.stdout, sys.stderr):
         try:
             stream.flush()
-        except (OSError, ValueError):
+        except (OSError, ValueError, AttributeError):     # AttributeError: closed (None)
             pass
     os._exit(code)
 

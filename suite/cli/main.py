@@ -177,6 +177,7 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def _solve(a) -> int:
+    from gnibench.suite.cli import streams
     from gnibench.suite.runs.progress import SolveProgress
     from gnibench.suite.runs.solving import solve_cell_spec, solve_output
     from gnibench.suite.runs.storage import write_frame
@@ -185,6 +186,8 @@ def _solve(a) -> int:
         raise UserError("--format parquet needs -o FILE (binary output is not written to stdout)")
     if a.output is not None:
         check_output_file(a.output)
+    elif streams.stdout_closed():
+        raise UserError("stdout is closed; allowed: -o FILE, or an open stdout")
     check_limits()
     cell = solve_cell_spec(a.problem, a.method, steps=a.steps, t_end=a.t_end, every=a.every,
                            dt_out=a.dt_out, section=a.section, reference=a.reference,

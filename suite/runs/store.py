@@ -177,6 +177,7 @@ class Store:
                 "state_names": list(part.state_names), "has_samples": part.samples is not None}
         meta = json.loads(json.dumps(meta, default=str))       # as it will be read back
         meta["checksum"] = content_checksum(meta, part.samples)
+        self._memo.pop(key, None)          # a part read before (in error, say) is replaced
         write_parquet(samples, self.path(key), meta)
 
     def read(self, key: str) -> Part | None:
