@@ -146,6 +146,22 @@ def test_cells_that_ended_in_error_are_computed_again(tmp_path, capsys, monkeypa
     assert list(pd.read_parquet(out / "cells.parquet")["status"]) == ["ok"] * 4
 
 
+@pytest.mark.parametrize("kind", ["fifo", "device", "directory"])
+def test_input_files_are_regular_files(kind, tmp_path, capsys):
+    """A FIFO given as --load or as the experiment blocked the read for ever, /dev/zero never
+    ended it (memory grew without a bound): refused before they are read."""
+    path = {"fifo": tmp_path / "in.toml", "device": Path("/dev/zero"),
+            "directory": tmp_path / "dir.toml"}[kind]
+    if kind == "fifo":
+        os.mkfifo(path)
+    elif kind == "directory":
+        path.mkdir()
+    for argv in (SOLVE + ["--load", str(path)], ["run", str(path), "-o", str(tmp_path / "o")]):
+        code, _out, err = run(argv, capsys)
+        assert "allowed: a regular file" in one_error_line(code, err)
+    assert not (tmp_path / "o").exists()
+
+
 # ---- output files: regular files only ----------------------------------------------------------
 
 def test_fifo_and_symlink_outputs_are_refused_and_left_alone(tmp_path, capsys):
