@@ -116,3 +116,25 @@ def test_a_peer_with_a_plausible_length_and_garbage_is_one_line(peer, tmp_path):
     err = p.stderr.strip().splitlines()
     assert p.returncode == 2 and len(err) == 1 and err[0].startswith("gnibench: error:"), err
     assert not out.exists()
+
+
+def test_a_local_cluster_beside_a_taken_port_8787_says_nothing(tmp_path):
+    """The LocalCluster's HTTP server went to Dask's default port 8787 and, that port taken by
+    another cluster, warned on stderr: a Dask run now says only its own lines."""
+    taken = socket.socket()
+    try:
+        taken.bind(("127.0.0.1", 8787))
+        taken.listen(1)
+    except OSError:
+        pass                             # taken already: the case itself
+    exp = tmp_path / "tiny.toml"
+    exp.write_text('name = "tiny"\ntitle = "Tiny"\nreference = "[HLW] (2.2)"\nsteps = 20\n'
+                   '[[cells]]\nproblems = ["harmonic-oscillator"]\nmethods = ["rk4:h=0.1"]\n')
+    try:
+        p = subprocess.run([GNIBENCH, "run", str(exp), "-o", str(tmp_path / "out"),
+                            "--executor", "dask", "-j", "1", "--no-report"],
+                           capture_output=True, text=True, timeout=300, check=False)
+    finally:
+        taken.close()
+    assert p.returncode == 0, p.stderr
+    assert all(ln.startswith(("gnibench:", "[")) for ln in p.stderr.splitlines()), p.stderr
