@@ -337,6 +337,17 @@ def test_report_of_a_damaged_table_is_one_line(results, tmp_path, capsys, damage
     assert "cells.parquet" in one_error_line(code, err)
 
 
+def test_report_of_tables_of_another_program_is_one_line(tmp_path, capsys):
+    """Parquet files under the tables' names but written by something else: a KeyError traceback
+    (no 'method' column) before."""
+    alien = tmp_path / "alien"
+    alien.mkdir()
+    for name in ("cells", "samples", "timings"):
+        pd.DataFrame({"a": [1, 2]}).to_parquet(alien / f"{name}.parquet")
+    code, _out, err = run(["report", str(alien), "-o", str(tmp_path / "site")], capsys)
+    assert "not a gnibench table" in one_error_line(code, err)
+
+
 def test_bench_storage_that_is_a_file_is_refused_before_timing(tmp_path, capsys, monkeypatch):
     from gnibench.suite.runs import bench
 
