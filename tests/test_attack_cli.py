@@ -186,6 +186,13 @@ def test_device_outputs_are_refused(device):
     with pytest.raises(UserError, match="character device"):
         check_output_file(Path(device))
 
+def test_a_broken_symlink_as_the_results_directory_is_named(tmp_path, capsys):
+    link = tmp_path / "out"
+    link.symlink_to(tmp_path / "gone" / "dir")
+    code, _out, err = run(["run", "quick", "-o", str(link)], capsys)
+    assert "broken symlink" in one_error_line(code, err)
+    assert not (tmp_path / "gone").exists()
+
 
 @pytest.mark.parametrize("place", ["/proc/gnibench-x.csv", "/proc/self/x.csv", "/sys/x.csv"])
 def test_outputs_where_nothing_can_be_created_are_refused(place, capsys):
