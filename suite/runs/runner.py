@@ -23,12 +23,12 @@ which order the cells ran.
 
 Resuming: running the same command again reuses every stored cell whose key matches (spec, code
 and versions; :func:`gnibench.suite.runs.store.cell_key`) and that did not end in ``error``, and
-computes only the others; ``fresh`` ignores the store. An experiment's consolidated tables are rewritten after one of its cells
-finishes whenever the time since their last write (or the start) is at least ``FLUSH_SECONDS``
-and ``FLUSH_RATIO`` times what that write took (so that a short run writes its tables once, and a
-run over many experiments, e.g. ``gnibench reproduce all``, does not rewrite the tables of the
-experiments whose cells are not running), at the end, and on Ctrl-C; unfinished cells appear with
-status ``pending`` and ``complete: false``.
+computes only the others; ``fresh`` ignores the store. An experiment's consolidated tables are
+rewritten after one of its cells finishes whenever the time since their last write (or the
+start) is at least ``FLUSH_SECONDS`` and ``FLUSH_RATIO`` times what that write took (so that a
+short run writes its tables once, and a run over many experiments, e.g. ``gnibench reproduce
+all``, does not rewrite the tables of the experiments whose cells are not running), at the end,
+and on Ctrl-C; unfinished cells appear with status ``pending`` and ``complete: false``.
 
 A cell that raises (anything but a KeyboardInterrupt) gets status ``error`` with the exception
 type and message as reason, and the run goes on. Bad input never reaches this point: the whole
