@@ -105,17 +105,29 @@ def _serve(conn, parent: int, workers: int) -> None:
                 if pool is None:
                     pool = ProcessPoolExecutor(workers, mp_context=mp.get_context("fork"),
                                                initializer=quiet_worker, initargs=(os.getpid(),))
-                futures.append(pool.submit(render, *message[1:]))
+                futures.append((pool.submit(render, *message[1:]), message[2]))
             elif message[0] == "wait":
-                errors = ["".join(traceback.format_exception(f.exception()))
-                          for f in futures if f.exception() is not None]
+                failed = [(f.exception(), path) for f, path in futures
+                          if f.exception() is not None]
                 futures = []
-                conn.send("\n".join(errors) or None)
+                faults = [(e.errno, e.strerror, str(path)) for e, path in failed
+                          if isinstance(e, OSError)]
+                conn.send(("fault", *faults[0]) if faults else "\n".join(
+                    "".join(traceback.format_exception(e)) for e, _ in failed) or None)
             else:
                 return
     finally:
         if pool is not None:
             pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _fault(number, why, path):
+    """A figure that could not be written (a full disk, a vanished directory): a one-line Fault;
+    the tables are written already, the next report draws what is missing."""
+    from gnibench.suite.foundation.outputs import fault
+
+    return fault(OSError(number, why), f"drawing {path}",
+                 "run the same command again once the cause is removed")
 
 
 class Drawers:
@@ -158,7 +170,10 @@ class Drawers:
             self.start()
         if self.process is None:
             for job in local:
-                render(job.plot, job.path)
+                try:
+                    render(job.plot, job.path)
+                except OSError as e:       # a full disk, say: one line, exit 1
+                    raise _fault(e.errno, e.strerror, job.path) from None
             return
         for job in local:
             self.submit(job)
@@ -167,6 +182,8 @@ class Drawers:
             error = self.conn.recv()
         except (EOFError, OSError) as e:
             raise RuntimeError(f"the drawing process ended unexpectedly ({e})") from None
+        if isinstance(error, tuple):
+            raise _fault(*error[1:])
         if error is not None:
             raise RuntimeError(f"drawing a figure failed:\n{error}")
 

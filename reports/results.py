@@ -92,13 +92,28 @@ def is_results_dir(path: Path) -> bool:
     return all((path / f).is_file() for f in ("cells.parquet", "samples.parquet", "timings.parquet"))
 
 
+CELL_COLUMNS = ("cell", "problem", "method", "status", "h", "t_end")
+
+
+def _ours(table, path: Path, columns):
+    """``table`` when it has the columns a gnibench table has, else a one-line UserError (a
+    Parquet file of another program under the same name was a KeyError traceback)."""
+    missing = [c for c in columns if c not in table.columns]
+    if missing:
+        raise UserError(f"cannot read {path} (no column {missing[0]!r}); it is damaged or not a "
+                        f"gnibench table: run the command that wrote it again")
+    return table
+
+
 def load_results(path: Path) -> Results:
     """Read one results directory (see the module docstring)."""
 
     path = Path(path)
     meta = parquet_meta(path / "cells.parquet")
-    cells = add_families(read_table(path / "cells.parquet"))
-    timings = read_table(path / "timings.parquet")
+    cells = _ours(read_table(path / "cells.parquet"), path / "cells.parquet", CELL_COLUMNS)
+    cells = add_families(cells)
+    timings = _ours(read_table(path / "timings.parquet"), path / "timings.parquet",
+                    ("cell", "wall_seconds", "compile_seconds"))
     written = str(parquet_meta(path / "timings.parquet").get("written_at", ""))
     res = Results(path, meta, cells, timings, written)
     if (path / "figure" / "figure.json").exists():

@@ -97,7 +97,10 @@ def _environments():
 
 
 def _write(path: Path, text: str) -> None:
-    path.write_text(text, encoding="utf-8")
+    """A page, committed by a rename (a full disk leaves no half-written page and names it)."""
+    from gnibench.suite.foundation.cache import atomic_write
+
+    atomic_write(path, lambda tmp: Path(tmp).write_text(text, encoding="utf-8"))
 
 
 def _copy_figure(res, img_dir: Path) -> None:

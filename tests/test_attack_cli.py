@@ -106,6 +106,62 @@ def test_budget_variables_accept_exponents(capsys, monkeypatch):
     assert run(["solve", OSC, "rk4:h=0.1", "--steps", "1000"], capsys)[0] == 0
 
 
+def test_disabled_jit_is_refused_before_work(capsys, monkeypatch, tmp_path):
+    """NUMBA_DISABLE_JIT=1 made every cell of a run end in error (stored, and reused by the next
+    run without it) and a solve a traceback."""
+    monkeypatch.setenv("NUMBA_DISABLE_JIT", "1")
+    out = tmp_path / "out"
+    for argv in (SOLVE, ["run", "quick", "-o", str(out), "-j", "1"]):
+        code, _out, err = run(argv, capsys)
+        assert "NUMBA_DISABLE_JIT" in one_error_line(code, err)
+    assert not out.exists()
+    monkeypatch.setenv("NUMBA_DISABLE_JIT", "0")
+    assert run(SOLVE, capsys)[0] == 0
+
+
+def test_cells_that_ended_in_error_are_computed_again(tmp_path, capsys, monkeypatch):
+    """An unexpected failure is not a result of a cell's inputs: the next run computes the cell
+    again (the tables then hold the new part, not the one in error read at the start)."""
+    from gnibench.suite.cell import solve
+
+    exp = tmp_path / "tiny.toml"
+    exp.write_text(TINY)
+    out = tmp_path / "out"
+    real = solve.solve_cell
+
+    def broken(spec, **k):
+        if spec.problem.record.id == "pendulum":
+            raise MemoryError("out of memory")
+        return real(spec, **k)
+
+    monkeypatch.setattr(solve, "solve_cell", broken)
+    assert main(["run", str(exp), "-o", str(out), "-j", "1", "--no-report"]) == 0
+    cells = pd.read_parquet(out / "cells.parquet")
+    assert sorted(cells["status"]) == ["error", "error", "ok", "ok"]
+    monkeypatch.setattr(solve, "solve_cell", real)
+    capsys.readouterr()
+    assert main(["run", str(exp), "-o", str(out), "-j", "1", "--no-report"]) == 0
+    err = capsys.readouterr().err
+    assert "(2 reused from the store, 2 to compute, 2 of them ended in error before)" in err
+    assert list(pd.read_parquet(out / "cells.parquet")["status"]) == ["ok"] * 4
+
+
+@pytest.mark.parametrize("kind", ["fifo", "device", "directory"])
+def test_input_files_are_regular_files(kind, tmp_path, capsys):
+    """A FIFO given as --load or as the experiment blocked the read for ever, /dev/zero never
+    ended it (memory grew without a bound): refused before they are read."""
+    path = {"fifo": tmp_path / "in.toml", "device": Path("/dev/zero"),
+            "directory": tmp_path / "dir.toml"}[kind]
+    if kind == "fifo":
+        os.mkfifo(path)
+    elif kind == "directory":
+        path.mkdir()
+    for argv in (SOLVE + ["--load", str(path)], ["run", str(path), "-o", str(tmp_path / "o")]):
+        code, _out, err = run(argv, capsys)
+        assert "allowed: a regular file" in one_error_line(code, err)
+    assert not (tmp_path / "o").exists()
+
+
 # ---- output files: regular files only ----------------------------------------------------------
 
 def test_fifo_and_symlink_outputs_are_refused_and_left_alone(tmp_path, capsys):
@@ -129,6 +185,13 @@ def test_device_outputs_are_refused(device):
     """Checked on the real devices without writing (run as root, a rename would replace them)."""
     with pytest.raises(UserError, match="character device"):
         check_output_file(Path(device))
+
+def test_a_broken_symlink_as_the_results_directory_is_named(tmp_path, capsys):
+    link = tmp_path / "out"
+    link.symlink_to(tmp_path / "gone" / "dir")
+    code, _out, err = run(["run", "quick", "-o", str(link)], capsys)
+    assert "broken symlink" in one_error_line(code, err)
+    assert not (tmp_path / "gone").exists()
 
 
 @pytest.mark.parametrize("place", ["/proc/gnibench-x.csv", "/proc/self/x.csv", "/sys/x.csv"])
@@ -196,6 +259,38 @@ def test_disk_full_during_a_run_keeps_the_stored_cells_and_a_rerun_completes(tmp
         assert (full / name).read_bytes() == (whole / name).read_bytes()
 
 
+def test_a_fresh_run_stopped_early_counts_its_stored_cells_and_says_drop_fresh(tmp_path, capsys,
+                                                                             monkeypatch):
+    """A signal between a cell's commit and its read-back: the cell is stored and counted (it was
+    left out of 'k of n cells are stored'); after --fresh the advice is to run again without it
+    (the same command would ignore what was stored)."""
+    from gnibench.suite.runs import store
+
+    exp = tmp_path / "tiny.toml"
+    exp.write_text(TINY)
+    real = store.Store.read
+    computed = []
+
+    def read(self, key):
+        if key in computed and len(computed) == 1:   # the read-back of the first cell stored
+            computed.append("interrupted")
+            raise KeyboardInterrupt
+        return real(self, key)
+
+    def write(self, key, part, empty, real_write=store.Store.write):
+        real_write(self, key, part, empty)
+        computed.append(key)
+
+    monkeypatch.setattr(store.Store, "read", read)
+    monkeypatch.setattr(store.Store, "write", write)
+    code = main(["run", str(exp), "-o", str(tmp_path / "out"), "-j", "1", "--no-report",
+                 "--fresh"])
+    err = capsys.readouterr().err
+    assert code == 130 and "1 of 4 cells are stored" in err, err
+    assert "run it again without --fresh" in err
+    assert len(list((tmp_path / "out" / "parts").glob("*.parquet"))) == 1
+
+
 # ---- report and bench -------------------------------------------------------------------------
 
 @pytest.fixture(scope="module")
@@ -215,6 +310,26 @@ def test_report_to_an_existing_file_or_a_read_only_place(results, tmp_path, caps
     assert taken.read_text() == "not a directory"
 
 
+def test_disk_full_while_writing_a_report_page_is_one_line_naming_it(results, tmp_path, capsys,
+                                                                    monkeypatch):
+    """ENOSPC in a page of ``gnibench report``: one line naming the page, no half-written page
+    (it was 'gnibench: error: No space left on device', naming nothing)."""
+    real = Path.write_text
+
+    def write_text(self, text, *a, **k):
+        if self.name.startswith(".index.html"):
+            real(self, text[:10], *a, **k)
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return real(self, text, *a, **k)
+
+    monkeypatch.setattr(Path, "write_text", write_text)
+    site = tmp_path / "site"
+    code, _out, err = run(["report", str(results), "-o", str(site)], capsys)
+    err = "\n".join(ln for ln in err.splitlines() if not ln.startswith("gnibench: report:"))
+    assert str(site / "index.html") in one_error_line(code, err, status=1)
+    assert not (site / "index.html").exists() and not list(site.glob(".index.html*"))
+
+
 @pytest.mark.parametrize("damage", ["truncate", "garbage", "empty"])
 def test_report_of_a_damaged_table_is_one_line(results, tmp_path, capsys, damage):
     import shutil
@@ -227,6 +342,17 @@ def test_report_of_a_damaged_table_is_one_line(results, tmp_path, capsys, damage
                        "empty": b""}[damage])
     code, _out, err = run(["report", str(copy), "-o", str(tmp_path / "site")], capsys)
     assert "cells.parquet" in one_error_line(code, err)
+
+
+def test_report_of_tables_of_another_program_is_one_line(tmp_path, capsys):
+    """Parquet files under the tables' names but written by something else: a KeyError traceback
+    (no 'method' column) before."""
+    alien = tmp_path / "alien"
+    alien.mkdir()
+    for name in ("cells", "samples", "timings"):
+        pd.DataFrame({"a": [1, 2]}).to_parquet(alien / f"{name}.parquet")
+    code, _out, err = run(["report", str(alien), "-o", str(tmp_path / "site")], capsys)
+    assert "not a gnibench table" in one_error_line(code, err)
 
 
 def test_bench_storage_that_is_a_file_is_refused_before_timing(tmp_path, capsys, monkeypatch):
@@ -270,6 +396,26 @@ def test_a_reader_that_stops_reading_ends_nothing(argv):
     err = p.stderr.read().decode()
     assert p.wait(timeout=300) == 0, err
     assert first and err == ""
+
+
+def _closing(*fds):
+    return lambda: [os.close(fd) for fd in fds]
+
+
+def test_closed_standard_streams(tmp_path):
+    """``>&-`` and ``2>&-``: a solve to a closed stdout is refused before work (exit 2; it was a
+    traceback after the work), one with -o completes; a closed stderr is silence, the exit code
+    still says what happened (a traceback at the end made every code 1)."""
+    p = subprocess.run([GNIBENCH, *SOLVE], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                       text=True, timeout=300, check=False, preexec_fn=_closing(1))
+    assert "stdout is closed" in one_error_line(p.returncode, p.stderr)
+    out = tmp_path / "x.csv"
+    p = subprocess.run([GNIBENCH, *SOLVE, "-o", str(out)], stderr=subprocess.PIPE, text=True,
+                       timeout=300, check=False, preexec_fn=_closing(1, 2))
+    assert p.returncode == 0 and out.read_text().startswith("t,")
+    p = subprocess.run([GNIBENCH, "solve", OSC, "rk4:h=-1", "--steps", "10"], timeout=300,
+                       check=False, preexec_fn=_closing(2))
+    assert p.returncode == 2
 
 
 def test_a_run_goes_on_when_its_progress_reader_goes_away(tmp_path):

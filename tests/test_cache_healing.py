@@ -114,14 +114,27 @@ def test_a_cache_directory_that_is_a_file_is_one_line(tmp_path):
         len(p.stderr.splitlines()) == 1
 
 
-def test_a_results_lock_replaced_by_a_directory_heals(tmp_path, capsys):
+@pytest.mark.parametrize("what", ["directory", "fifo", "socket"])
+def test_a_results_lock_replaced_by_a_special_file_heals(tmp_path, capsys, what):
+    """A ``.lock`` that is a directory, a FIFO or a socket is removed with one warning line (a
+    FIFO was 'gnibench: error: Invalid argument', exit 1, at every run)."""
+    import socket
+
     from gnibench.suite.cli.main import main
 
     exp = tmp_path / "tiny.toml"
     exp.write_text('name = "tiny"\ntitle = "Tiny"\nreference = "[HLW] (2.2)"\nsteps = 10\n'
                    '[[cells]]\nproblems = ["harmonic-oscillator"]\nmethods = ["rk4"]\n')
     out = tmp_path / "out"
-    (out / ".lock" / "inner").mkdir(parents=True)
+    if what == "directory":
+        (out / ".lock" / "inner").mkdir(parents=True)
+    else:
+        out.mkdir()
+        if what == "fifo":
+            os.mkfifo(out / ".lock")
+        else:
+            with socket.socket(socket.AF_UNIX) as s:
+                s.bind(str(out / ".lock"))
     assert main(["run", str(exp), "-o", str(out), "-j", "1", "--no-report"]) == 0
     warnings = [ln for ln in capsys.readouterr().err.splitlines() if "warning" in ln]
     assert len(warnings) == 1 and ".lock" in warnings[0]

@@ -70,7 +70,7 @@ def test_only_the_whitelisted_grammar(text, why):
 def test_names_and_grammar_can_be_restricted():
     refused("q1 + 1", "unknown name 'q1'", names=("p2", "q2"))
     refused("p2 > 1", "uses Compare", names=("p2",), logic=False)
-    refused("abs(p2)", "calls only nothing", names=("p2",), functions=())
+    refused("abs(p2)", "calls a function; none is allowed here", names=("p2",), functions=())
     assert ex.parse("0.1 / p2", "w", names=("p2", "q2"), functions=(), logic=False).names == {"p2"}
     refused(3, "a string")
 

@@ -13,6 +13,7 @@ from gnibench.reports import drawing
 from gnibench.reports.drawing import MANIFEST, Drawers, Job, draw, likely_to_draw
 from gnibench.reports.render import Panel, Plot, Series, plain_label, plot_key
 from gnibench.reports.site import build_site
+from gnibench.suite.foundation.outputs import Fault
 from support_reports import make_results
 
 
@@ -149,3 +150,16 @@ def test_a_failing_figure_is_an_error_of_the_drawing_process(tmp_path):
         drawers.submit(Job(bad, tmp_path / "bad.png"))
         drawers.wait()
     assert (tmp_path / "good.png").is_file() and drawers.process is None
+
+
+@pytest.mark.parametrize("workers", [2, 0])
+def test_a_figure_that_cannot_be_written_is_one_line(tmp_path, workers):
+    """A figure whose file cannot be written (a full disk, a vanished directory) is a one-line
+    Fault naming it, drawn in the drawing process or here; it was a RuntimeError carrying the
+    workers' tracebacks (ENOSPC in ``gnibench report``: 430 lines)."""
+    gone = tmp_path / "gone" / "a.png"
+    drawers = Drawers().start(workers) if workers else Drawers()
+    with drawers, pytest.raises(Fault) as caught:
+        drawers.submit(Job(small_plot(), gone))
+        drawers.wait()
+    assert str(gone) in str(caught.value) and "\n" not in str(caught.value)

@@ -3,8 +3,11 @@ timeout for the whole exchange, before the output directory exists (issue 18, Da
 from __future__ import annotations
 
 import socket
+import subprocess
+import sys
 import threading
 import time
+from pathlib import Path
 
 import pytest
 from gnibench.suite.cli.main import main
@@ -14,6 +17,7 @@ pytest.importorskip("distributed")
 from gnibench.suite.runs.scheduler import probe
 
 SAFETY = 60.0
+GNIBENCH = str(Path(sys.executable).with_name("gnibench"))
 
 
 class Peer:
@@ -97,3 +101,40 @@ def test_a_real_scheduler_answers():
     with LocalCluster(n_workers=0, processes=False, dashboard_address=None) as cluster:
         info = probe(cluster.scheduler_address, timeout=10.0)
     assert info["type"] == "Scheduler"
+
+
+
+@pytest.mark.parametrize("peer", [b"\x10" + b"\x00" * 7 + b"\x00" * 16], indirect=True)
+def test_a_peer_with_a_plausible_length_and_garbage_is_one_line(peer, tmp_path):
+    """The first 8 bytes pass as a handshake's length; distributed then fails to decode the
+    frames and logged CRITICAL with a traceback on stderr beside the probe's line (a separate
+    process: pytest captures the logging of this one)."""
+    out = tmp_path / "out"
+    p = subprocess.run([GNIBENCH, "run", "quick", "-o", str(out), "--executor", "dask",
+                        "--scheduler", peer.address], capture_output=True, text=True,
+                       timeout=SAFETY, check=False)
+    err = p.stderr.strip().splitlines()
+    assert p.returncode == 2 and len(err) == 1 and err[0].startswith("gnibench: error:"), err
+    assert not out.exists()
+
+
+def test_a_local_cluster_beside_a_taken_port_8787_says_nothing(tmp_path):
+    """The LocalCluster's HTTP server went to Dask's default port 8787 and, that port taken by
+    another cluster, warned on stderr: a Dask run now says only its own lines."""
+    taken = socket.socket()
+    try:
+        taken.bind(("127.0.0.1", 8787))
+        taken.listen(1)
+    except OSError:
+        pass                             # taken already: the case itself
+    exp = tmp_path / "tiny.toml"
+    exp.write_text('name = "tiny"\ntitle = "Tiny"\nreference = "[HLW] (2.2)"\nsteps = 20\n'
+                   '[[cells]]\nproblems = ["harmonic-oscillator"]\nmethods = ["rk4:h=0.1"]\n')
+    try:
+        p = subprocess.run([GNIBENCH, "run", str(exp), "-o", str(tmp_path / "out"),
+                            "--executor", "dask", "-j", "1", "--no-report"],
+                           capture_output=True, text=True, timeout=300, check=False)
+    finally:
+        taken.close()
+    assert p.returncode == 0, p.stderr
+    assert all(ln.startswith(("gnibench:", "[")) for ln in p.stderr.splitlines()), p.stderr

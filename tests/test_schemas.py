@@ -38,7 +38,7 @@ ATTACKS = {
     "fixed: 1e400": (field('"1e400"'), "not finite"),
     "fixed: 1/0": (field('"1/0"'), "1 / 0 is not a finite number"),
     "fixed: overflow": (field('"2.0 ** 5000"'), "is not a finite number"),
-    "fixed: a call": (field('"__import__(\'os\')"'), "calls only nothing"),
+    "fixed: a call": (field('"__import__(\'os\')"'), "calls a function; none is allowed here"),
     "fixed: an attribute": (field('"p2.real"'), "uses Attribute"),
     "fixed: an unknown name": (field('"q1 + 1"'), "unknown name 'q1'"),
     "label width 5e9": (figure(PANEL + 'label = "{=h:5000000000}"\n'), "bad format '5000000000'"),

@@ -268,3 +268,40 @@ def test_a_forked_child_has_no_wakeup_fd_default_handlers_and_the_parents_mask()
                          text=True, timeout=SAFETY)
     assert out.returncode == 0, out.stderr[-2000:]
     assert out.stdout.strip() == "(-1, True, [])"
+
+
+SIGNAL_AT_START = """
+import contextlib, os, signal, sys
+from gnibench.suite.cli import main, streams
+
+@contextlib.contextmanager
+def tolerant():                 # the signal comes as the command's handlers have just started
+    os.kill(os.getpid(), signal.SIGTERM)
+    yield
+
+streams.tolerant = tolerant
+print(main.main(["list", "methods"]))
+"""
+
+SIGNAL_ESCAPING_THE_COMMAND = """
+import signal, sys
+from gnibench.suite.cli import entry, main, signals
+
+def command():                  # a SIGTERM seen by the command's handlers escapes it
+    signals._state.received = signal.SIGTERM
+    raise KeyboardInterrupt
+
+main.main = command
+entry.main()
+"""
+
+
+def test_a_sigterm_as_the_handlers_start_is_one_line_and_exit_143():
+    """Between the command's handlers and its own ``try`` a SIGTERM escaped as exit code 130
+    with no line (seen with ``kill -TERM`` 0.05-0.07 s after the start)."""
+    out = subprocess.run([sys.executable, "-c", SIGNAL_AT_START], check=False,
+                         capture_output=True, text=True, timeout=SAFETY)
+    assert (out.stdout.strip(), out.stderr.strip()) == ("143", "gnibench: terminated")
+    out = subprocess.run([sys.executable, "-c", SIGNAL_ESCAPING_THE_COMMAND], check=False,
+                         capture_output=True, text=True, timeout=SAFETY)
+    assert out.returncode == 143, out.stderr[-2000:]

@@ -290,6 +290,18 @@ def test_expressions_outside_the_safe_subset_are_refused(text):
         parse(text, {"x": sp.Symbol("x"), "y": sp.Symbol("y")})
 
 
+@pytest.mark.parametrize("text", ["-" * 19990 + "x", "+".join(["x"] * 6000),
+                                  "x" + "**x" * 4000])
+def test_expressions_too_deep_for_the_parser_are_one_short_line(text):
+    """Within the 20000 characters, chains that overflow Python's own parser (MemoryError,
+    RecursionError) were tracebacks; the message quotes at most 80 characters of the text."""
+    import sympy as sp
+
+    with pytest.raises(ExpressionError, match="too deep for Python's parser") as caught:
+        parse(text, {"x": sp.Symbol("x")})
+    assert len(str(caught.value)) < 200
+
+
 def test_expressions_are_exact():
     import sympy as sp
 

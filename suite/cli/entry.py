@@ -25,14 +25,36 @@ def _early(signum, frame):
 for _s in (signal.SIGINT, signal.SIGTERM):
     signal.signal(_s, _early)
 
+# A standard stream closed by the caller (``>&-``, ``2>&-``) is /dev/null at its descriptor: else
+# the next file opened would get descriptor 1 or 2 and whatever writes there (numba, a worker)
+# would write into a result file. Python has set sys.stdout or sys.stderr to None already, so a
+# command still knows: stdout closed is refused (streams.py), stderr closed is silence.
+for _fd, _mode in ((0, os.O_RDONLY), (1, os.O_WRONLY), (2, os.O_WRONLY)):
+    try:
+        os.fstat(_fd)
+    except OSError:
+        _null = os.open(os.devnull, _mode)
+        if _null != _fd:
+            os.dup2(_null, _fd)
+            os.close(_null)
+        os.set_inheritable(_fd, True)
+
 
 def _end(code: int) -> None:
     for stream in (sys.stdout, sys.stderr):
         try:
             stream.flush()
-        except (OSError, ValueError):
+        except (OSError, ValueError, AttributeError):     # AttributeError: closed (None)
             pass
     os._exit(code)
+
+
+def _last_signal() -> int:
+    """The signal that ended the command: the one the command's own handlers saw last
+    (:mod:`gnibench.suite.cli.signals`), else the one these early handlers saw, else SIGINT."""
+    signals = sys.modules.get("gnibench.suite.cli.signals")
+    seen = getattr(getattr(signals, "_state", None), "received", None)
+    return seen or (_received[-1] if _received else signal.SIGINT)
 
 
 def main() -> int:
@@ -48,7 +70,7 @@ def main() -> int:
             _end(128 + _received[-1])
         code = command()
     except KeyboardInterrupt:               # a signal between the command's end and here
-        code = 128 + (_received[-1] if _received else signal.SIGINT)
+        code = 128 + _last_signal()
     _end(code)
     return code                             # not reached
 

@@ -178,6 +178,7 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def _solve(a) -> int:
+    from gnibench.suite.cli import streams
     from gnibench.suite.runs.progress import SolveProgress
     from gnibench.suite.runs.solving import solve_cell_spec, solve_output
     from gnibench.suite.runs.storage import write_frame
@@ -186,6 +187,8 @@ def _solve(a) -> int:
         raise UserError("--format parquet needs -o FILE (binary output is not written to stdout)")
     if a.output is not None:
         check_output_file(a.output)
+    elif streams.stdout_closed():
+        raise UserError("stdout is closed; allowed: -o FILE, or an open stdout")
     check_limits()
     cell = solve_cell_spec(a.problem, a.method, steps=a.steps, t_end=a.t_end, every=a.every,
                            dt_out=a.dt_out, section=a.section, reference=a.reference,
@@ -299,8 +302,13 @@ def main(argv=None) -> int:
     fault during work such as a full disk), 2 (bad input), 130/143 (SIGINT/SIGTERM)."""
     from gnibench.suite.cli import signals, streams
 
-    with signals.handling(), streams.tolerant():
-        return _main(argv)
+    try:
+        with signals.handling(), streams.tolerant():
+            return _main(argv)
+    except KeyboardInterrupt:       # a signal between the handlers' start and _main's own try
+        signals.quiet()
+        print(f"gnibench: {signals.message()}", file=sys.stderr)
+        return signals.exit_code()
 
 
 def _main(argv) -> int:

@@ -34,6 +34,8 @@ class _Stream:
         _silence(self._stream)
 
     def write(self, text):
+        if self._stream is None:            # closed before the command started (``>&-``)
+            return self._none(text)
         if self.closed_by_reader:
             return len(text)
         try:
@@ -49,8 +51,14 @@ class _Stream:
         for line in lines:
             self.write(line)
 
+    def _none(self, text):
+        if self._name == "stdout" and text:
+            raise Fault("writing to stdout failed: it is closed; allowed: an open stdout, or -o "
+                        "FILE where the command has one")
+        return len(text)
+
     def flush(self):
-        if self.closed_by_reader:
+        if self.closed_by_reader or self._stream is None:
             return
         try:
             self._stream.flush()
@@ -66,6 +74,11 @@ def _silence(stream) -> None:
         null = os.open(os.devnull, os.O_WRONLY)
         os.dup2(null, fd)
         os.close(null)
+
+
+def stdout_closed() -> bool:
+    """Was stdout closed before the command started (``gnibench ... >&-``)?"""
+    return isinstance(sys.stdout, _Stream) and sys.stdout._stream is None
 
 
 @contextlib.contextmanager

@@ -39,9 +39,14 @@ def limit(name: str) -> int:
 
 
 def check_limits() -> None:
-    """Refuse, before any work, a budget variable that is set but not a number."""
+    """Refuse, before any work, a budget variable that is set but not a number, and numba's
+    NUMBA_DISABLE_JIT (the kernels must be compiled: every cell would end in error)."""
     for name in _DEFAULTS:
         limit(name)
+    jit = os.environ.get("NUMBA_DISABLE_JIT", "").strip()
+    if jit.isdigit() and int(jit) != 0:         # numba reads it as an int, ignoring the rest
+        raise UserError(f"bad NUMBA_DISABLE_JIT={jit}: gnibench's kernels are compiled by numba; "
+                        "allowed: unset or 0")
 
 
 def check_count(value: float, what: str, budget: str, unit: str) -> None:

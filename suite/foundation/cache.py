@@ -23,19 +23,26 @@ from pathlib import Path
 def cache_root() -> Path:
     """The cache directory; a one-line UserError when it cannot be one (``GNIBENCH_CACHE_DIR``
     names a file, or a place where nothing can be created)."""
-    from gnibench.suite.foundation.errors import UserError
-
     given = os.environ.get("GNIBENCH_CACHE_DIR")
     root = Path(given or Path.home() / ".cache" / "gnibench")
-    name = f"GNIBENCH_CACHE_DIR={given}" if given else f"the cache directory {root}"
     if root.exists() and not root.is_dir():
-        raise UserError(f"bad {name}: it is not a directory; allowed: a directory (or unset: "
-                        f"~/.cache/gnibench)")
+        raise _bad_root(root, "it is not a directory")
     try:
         root.mkdir(parents=True, exist_ok=True)
     except OSError as e:
-        raise UserError(f"bad {name}: cannot create it ({e.strerror})") from None
+        raise _bad_root(root, f"cannot create it ({e.strerror})") from None
     return root
+
+
+def _bad_root(root: Path, why: str):
+    from gnibench.suite.foundation.errors import UserError
+
+    given = os.environ.get("GNIBENCH_CACHE_DIR")
+    if given:
+        return UserError(f"bad GNIBENCH_CACHE_DIR={given}: {why}; allowed: a writable directory "
+                         f"(or unset: ~/.cache/gnibench)")
+    return UserError(f"bad cache directory {root}: {why}; allowed: a writable directory, given "
+                     f"as GNIBENCH_CACHE_DIR=DIR")
 
 
 def check_cache_root() -> None:
@@ -47,9 +54,7 @@ def check_cache_root() -> None:
     try:
         probe(root, "cache")
     except UserError:
-        given = os.environ.get("GNIBENCH_CACHE_DIR")
-        name = f"GNIBENCH_CACHE_DIR={given}" if given else f"the cache directory {root}"
-        raise UserError(f"bad {name}: not writable; allowed: a writable directory") from None
+        raise _bad_root(root, "not writable") from None
 
 
 def cache_dir(sub: str = "") -> Path:
@@ -88,6 +93,10 @@ def atomic_write(path: Path, write) -> None:
     try:
         write(tmp)
         _replace(tmp, path)
+    except OSError as e:              # a full disk, say: the error names the file
+        if not e.filename:
+            e.filename = str(path)
+        raise
     finally:
         if tmp.exists():
             tmp.unlink()

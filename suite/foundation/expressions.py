@@ -98,7 +98,8 @@ def parse(text, where: str, *, names=None, functions=tuple(FUNCTIONS), logic: bo
             if not (isinstance(node.func, ast.Name) and node.func.id in functions
                     and not node.keywords and node.args
                     and not any(isinstance(a, ast.Starred) for a in node.args)):
-                raise bad("calls only " + (", ".join(functions) if functions else "nothing"))
+                raise bad("calls only " + ", ".join(functions) if functions
+                          else "calls a function; none is allowed here")
             calls.add(id(node.func))
             continue
         if not isinstance(node, kinds):

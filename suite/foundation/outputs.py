@@ -26,7 +26,8 @@ class Fault(Exception):
     """A fault of the environment during work (disk full, I/O error): one line, exit code 1."""
 
 
-def _kind(mode: int) -> str:
+def kind(mode: int) -> str:
+    """What a file of this mode is, in words ("a FIFO")."""
     for test, name in ((stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
                        (stat.S_ISFIFO, "a FIFO"), (stat.S_ISSOCK, "a socket"),
                        (stat.S_ISDIR, "a directory")):
@@ -68,7 +69,7 @@ def _check_file(path: Path, what: str) -> None:
         raise UserError(f"bad {what}: {e.strerror}") from None
     if mode is not None and not stat.S_ISREG(mode):
         hint = "; to discard the output, write to stdout" if stat.S_ISCHR(mode) else ""
-        raise UserError(f"bad {what}: it is {_kind(mode)}; allowed: a regular file{hint}")
+        raise UserError(f"bad {what}: it is {kind(mode)}; allowed: a regular file{hint}")
     parent = path.parent
     if not parent.exists():
         raise UserError(f"bad {what}: directory {parent} does not exist")

@@ -10,7 +10,10 @@ parser are caught as well, and the parsed document is at most :data:`MAX_DEPTH` 
 """
 from __future__ import annotations
 
+import os
+import stat
 import tomllib
+from pathlib import Path
 
 from gnibench.suite.foundation.errors import UserError
 
@@ -52,6 +55,36 @@ def nesting(text: str) -> int:
             depth = max(depth - 1, 0)
         i += 1
     return deepest
+
+
+def read_text_file(path, what: str) -> str:
+    """The UTF-8 text of the input file ``path`` (``what`` names it: "experiment file"): a
+    regular file (or a symlink to one) of at most 4 x :data:`MAX_CHARS` bytes, else one
+    UserError line before anything is read: a FIFO would block the read for ever, /dev/zero never
+    end it, a directory fail it."""
+    from gnibench.suite.foundation.outputs import kind
+
+    name = str(path)
+    try:
+        info = os.stat(path)
+    except FileNotFoundError:
+        raise UserError(f"no {what} {name!r}") from None
+    except OSError as e:
+        raise UserError(f"cannot read {what} {name!r} ({e.strerror})") from None
+    if not stat.S_ISREG(info.st_mode):
+        raise UserError(f"bad {what} {name!r}: it is {kind(info.st_mode)}; allowed: a regular "
+                        f"file")
+    if info.st_size > 4 * MAX_CHARS:
+        raise UserError(f"{what} {name!r} is {info.st_size} bytes; allowed: a TOML file of at "
+                        f"most {MAX_CHARS} characters")
+    try:
+        raw = Path(path).read_bytes()
+        return raw.decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise UserError(f"{what} {name!r} is not UTF-8 text (byte {e.start}); allowed: a TOML "
+                        f"file in UTF-8") from None
+    except OSError as e:
+        raise UserError(f"cannot read {what} {name!r} ({e.strerror})") from None
 
 
 def load_toml(text: str, source: str) -> dict:

@@ -18,6 +18,7 @@ kernels run in parallel.
 """
 from __future__ import annotations
 
+import os
 import signal
 from collections.abc import Callable, Iterator
 
@@ -109,8 +110,13 @@ def _dask(groups, jobs, scheduler) -> Iterator[CellOutcome]:
         blocked = {signal.SIGINT}
         signal.pthread_sigmask(signal.SIG_BLOCK, blocked)
         try:
+            # no dashboard, and the scheduler's HTTP server on a free local port (on its default
+            # 8787, taken by another cluster, it warned on stderr); the workers log critical
+            # errors only (a Ctrl-C cancels their cells: Dask's warnings about that are no news)
+            os.environ.setdefault("DASK_LOGGING__DISTRIBUTED", "critical")
             cluster = LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True,
-                                   dashboard_address=None)
+                                   dashboard_address=None,
+                                   scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})
             client = Client(cluster)
         finally:
             signal.pthread_sigmask(signal.SIG_UNBLOCK, blocked)

@@ -30,7 +30,7 @@ from gnibench.suite.cell.spec import structure, with_options
 from gnibench.suite.foundation.budgets import check_count
 from gnibench.suite.foundation.errors import UserError, unknown
 from gnibench.suite.foundation.params import format_float
-from gnibench.suite.foundation.tomlfile import MAX_CHARS, load_toml
+from gnibench.suite.foundation.tomlfile import load_toml, read_text_file
 from gnibench.suite.runs.cell import Cell
 
 if TYPE_CHECKING:          # the schema (pydantic) is imported when a file is parsed, not by workers
@@ -66,18 +66,8 @@ def load_experiment(name_or_path: str | Path, scale: str = "paper") -> Experimen
     arg = str(name_or_path)
     path = Path(arg)
     if path.suffix == ".toml" or "/" in arg or path.is_file():
-        if not path.is_file():
-            raise UserError(f"no experiment file {arg!r}")
-        if path.stat().st_size > 4 * MAX_CHARS:            # before reading it into memory
-            raise UserError(f"experiment file {arg!r} is {path.stat().st_size} bytes; allowed: "
-                            f"a TOML file of at most {MAX_CHARS} characters")
-        try:
-            text, source, base = path.read_text(encoding="utf-8"), path.name, path.parent
-        except UnicodeDecodeError as e:
-            raise UserError(f"experiment file {arg!r} is not UTF-8 text (byte {e.start}); allowed: "
-                            f"a TOML file in UTF-8") from None
-        except OSError as e:
-            raise UserError(f"cannot read experiment file {arg!r} ({e.strerror})") from None
+        text = read_text_file(path, "experiment file")
+        source, base = path.name, path.parent
     else:
         known = shipped()
         if arg not in known:

@@ -12,8 +12,8 @@ descriptor is pointed at /dev/null in every child forked while the lock is held
 A run that finds ``pid N`` in a lock it could take says so in one line: the run of pid N ended
 without unlocking (it was killed), and its lock is taken over. A run that cannot take the lock
 names who holds it: the running gnibench, or the processes that outlived it (found in /proc).
-The lock file is opened without following a symlink, and a ``.lock`` that is a directory is
-removed with one warning line.
+The lock file is opened without following a symlink, and a ``.lock`` that is a directory, a
+FIFO, a socket or a device is removed with one warning line.
 """
 from __future__ import annotations
 
@@ -22,6 +22,7 @@ import fcntl
 import os
 import re
 import shutil
+import stat
 from pathlib import Path
 
 from gnibench.suite.foundation.cache import warn
@@ -47,9 +48,29 @@ if hasattr(os, "register_at_fork"):
     os.register_at_fork(after_in_child=_forget_in_child)
 
 
+def _special(path: Path) -> str | None:
+    """What ``path`` is when it is neither absent, a regular file, a directory nor a symlink (a
+    FIFO, a socket, a device: a flock on it cannot be kept, or opening it blocks or fails)."""
+    from gnibench.suite.foundation.outputs import kind
+
+    try:
+        mode = os.lstat(path).st_mode
+    except OSError:
+        return None
+    if stat.S_ISREG(mode) or stat.S_ISDIR(mode) or stat.S_ISLNK(mode):
+        return None
+    return kind(mode)
+
+
 def _open(path: Path) -> int:
-    flags = os.O_RDWR | os.O_CREAT | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
+    flags = (os.O_RDWR | os.O_CREAT | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
+             | os.O_NONBLOCK)
     for _ in range(2):
+        special = _special(path)
+        if special:
+            warn(f"{path} is {special}, not a lock file; removed")
+            with contextlib.suppress(FileNotFoundError):
+                path.unlink()
         try:
             return os.open(path, flags, 0o644)
         except IsADirectoryError:

@@ -22,13 +22,13 @@ that differ only in h) are computed at each consolidation from the cells and sam
 which order the cells ran.
 
 Resuming: running the same command again reuses every stored cell whose key matches (spec, code
-and versions; :func:`gnibench.suite.runs.store.cell_key`) and computes only the others; ``fresh``
-ignores the store. An experiment's consolidated tables are rewritten after one of its cells
-finishes whenever the time since their last write (or the start) is at least ``FLUSH_SECONDS``
-and ``FLUSH_RATIO`` times what that write took (so that a short run writes its tables once, and a
-run over many experiments, e.g. ``gnibench reproduce all``, does not rewrite the tables of the
-experiments whose cells are not running), at the end, and on Ctrl-C; unfinished cells appear with
-status ``pending`` and ``complete: false``.
+and versions; :func:`gnibench.suite.runs.store.cell_key`) and that did not end in ``error``, and
+computes only the others; ``fresh`` ignores the store. An experiment's consolidated tables are
+rewritten after one of its cells finishes whenever the time since their last write (or the
+start) is at least ``FLUSH_SECONDS`` and ``FLUSH_RATIO`` times what that write took (so that a
+short run writes its tables once, and a run over many experiments, e.g. ``gnibench reproduce
+all``, does not rewrite the tables of the experiments whose cells are not running), at the end,
+and on Ctrl-C; unfinished cells appear with status ``pending`` and ``complete: false``.
 
 A cell that raises (anything but a KeyboardInterrupt) gets status ``error`` with the exception
 type and message as reason, and the run goes on. Bad input never reaches this point: the whole
@@ -45,6 +45,7 @@ import numpy as np
 from gnibench.suite.foundation.cache import atomic_write
 from gnibench.suite.foundation.outputs import fault
 from gnibench.suite.foundation.provenance import versions
+from gnibench.suite.foundation.status import Status
 from gnibench.suite.runs import executors
 from gnibench.suite.runs.cellwork import CellOutcome, kernel_group
 from gnibench.suite.runs.experiment import Experiment, load_experiment
@@ -122,15 +123,20 @@ def run_experiments(experiments: list[Experiment], outs: list[Path], store_root:
         for e, k in zip(experiments, keys):
             for c in e.cells:
                 unique.setdefault(k[c.id], c)
-        done = set() if fresh else {k for k in unique if store.read(k)}
+        stored = {} if fresh else {k: store.read(k) for k in unique}
+        done = {k for k, part in stored.items() if _reusable(part)}
+        retried = sum(1 for part in stored.values() if part is not None and not _reusable(part))
         todo = [c for k, c in unique.items() if k not in done]
         key_of = {id(c): k for k, c in unique.items()}
         if pool is not None:
             pool.fit(executors.workers(jobs, len(todo)))
         where = outs[0] if len(outs) == 1 else store_root
+        again = f", {retried} of them ended in error before" if retried else ""
         print(f"gnibench: {name}: {len(unique)} cells -> {where} ({len(done)} reused from the "
-              f"store, {len(todo)} to compute)", file=log, flush=True)
+              f"store, {len(todo)} to compute{again})", file=log, flush=True)
         progress = RunProgress(len(unique), len(done), log, name)
+        # --fresh again would ignore what this run stores
+        again = "run it again without --fresh" if fresh else "run the same command again"
         # the pool's workers get their first cells now; the tables' writers are made meanwhile
         outcomes = executors.run(_groups(todo), executor, jobs, scheduler, progress.cell_progress,
                                  pool)
@@ -142,10 +148,10 @@ def run_experiments(experiments: list[Experiment], outs: list[Path], store_root:
                 for outcome in outcomes:
                     key = key_of.get(id(outcome.cell)) or cell_key(outcome.cell)
                     store.write(key, _part(outcome), writers[0].empty_samples)
+                    done.add(key)         # stored: counted even if a signal comes right now
                     # read back (verified) while the workers go on: the tables at the end are
                     # made from the disk's parts without waiting for the disk
                     store.read(key)
-                    done.add(key)
                     progress.cell_done(outcome)
                     for w in writers:      # only the experiments that hold the cell have news
                         if key in w.key_set:
@@ -160,16 +166,21 @@ def run_experiments(experiments: list[Experiment], outs: list[Path], store_root:
                 for w in writers:
                     w.flush(done)
             print(f"gnibench: interrupted: {len(done)} of {len(unique)} cells are stored in "
-                  f"{store_root}; run the same command again to compute the rest", file=log,
-                  flush=True)
+                  f"{store_root}; {again} to compute the rest", file=log, flush=True)
             raise
         except OSError as e:          # the disk filled up, say: what is stored stays
             raise fault(e, "the run", f"{len(done)} of {len(unique)} cells are stored in "
-                        f"{store_root}; run the same command again once the cause is "
-                        f"removed") from None
+                        f"{store_root}; {again} once the cause is removed") from None
         finally:
             progress.close()
     return outs
+
+
+def _reusable(part: Part | None) -> bool:
+    """A stored cell is reused unless it ended in ``error``: an unexpected failure (a worker out
+    of memory, a broken environment such as NUMBA_DISABLE_JIT=1) is not a result of its inputs,
+    and the next run tries it again."""
+    return part is not None and part.row.get("status") != str(Status.ERROR)
 
 
 def _groups(cells) -> list[list]:

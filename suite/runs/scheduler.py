@@ -18,6 +18,8 @@ in it can hang the command.
 """
 from __future__ import annotations
 
+import contextlib
+import logging
 import socket
 import struct
 import threading
@@ -91,6 +93,19 @@ def _in_thread(fn, seconds: float):
     return box["value"]
 
 
+@contextlib.contextmanager
+def _quiet_dask_logs():
+    """distributed logs a message it cannot decode as CRITICAL, with a traceback, on stderr (a
+    peer that sends a plausible length and then garbage): the probe's one line says it all."""
+    logger = logging.getLogger("distributed")
+    level = logger.level
+    logger.setLevel(logging.CRITICAL + 1)
+    try:
+        yield
+    finally:
+        logger.setLevel(level)
+
+
 def probe(address: str, timeout: float = TIMEOUT) -> dict:
     """The scheduler's identity, or a one-line UserError within ``timeout`` seconds."""
     import asyncio
@@ -114,7 +129,8 @@ def probe(address: str, timeout: float = TIMEOUT) -> dict:
         return asyncio.run(asyncio.wait_for(_identity(address, left), left))
 
     try:
-        info = _in_thread(ask, timeout + 0.5)
+        with _quiet_dask_logs():
+            info = _in_thread(ask, timeout + 0.5)
     except TimeoutError:
         raise _bad(address, f"no Dask answer within {timeout:g} s") from None
     except UserError:

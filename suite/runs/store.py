@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Self
@@ -134,6 +135,9 @@ class Store:
         try:
             if out.exists() and not out.is_dir():
                 raise UserError(f"bad -o {out}: it exists and is not a directory")
+            if out.is_symlink() and not out.exists():
+                raise UserError(f"bad -o {out}: it is a broken symlink (to {os.readlink(out)}); "
+                                f"allowed: a directory, or a place to make one")
             out.mkdir(parents=True, exist_ok=True)
         except OSError as e:
             raise UserError(f"bad -o {out}: cannot create the directory ({e.strerror})") from None
@@ -177,6 +181,7 @@ class Store:
                 "state_names": list(part.state_names), "has_samples": part.samples is not None}
         meta = json.loads(json.dumps(meta, default=str))       # as it will be read back
         meta["checksum"] = content_checksum(meta, part.samples)
+        self._memo.pop(key, None)          # a part read before (in error, say) is replaced
         write_parquet(samples, self.path(key), meta)
 
     def read(self, key: str) -> Part | None:

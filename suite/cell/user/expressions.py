@@ -50,8 +50,17 @@ def parse(text, names: dict | None = None):
     try:
         tree = ast.parse(source, mode="eval")
     except SyntaxError as e:
-        raise ExpressionError(f"{text!r} is not an expression ({e.msg})") from None
+        raise ExpressionError(f"{_short(text)} is not an expression ({e.msg})") from None
+    except (ValueError, MemoryError, RecursionError) as e:   # the parser's own stack
+        raise ExpressionError(f"{_short(text)} is not an expression ({type(e).__name__}: "
+                              f"nested or chained too deep for Python's parser)") from None
     return _Builder(source, names, sp).build(tree.body, 0)
+
+
+def _short(text: str) -> str:
+    """``text`` quoted for a one-line error, at most 80 characters of it."""
+    return repr(text if len(text) <= 80 else f"{text[:60]}...{text[-15:]} ({len(text)} "
+                f"characters)")
 
 
 class _Builder:

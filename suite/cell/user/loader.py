@@ -58,16 +58,10 @@ _discovered = False
 def load(path) -> list[str]:
     """Load a definitions file; returns the ids it defines. Raises UserError naming the file,
     entry and key of a bad definition."""
+    from gnibench.suite.foundation.tomlfile import read_text_file
+
     p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise UserError(f"no definitions file {str(path)!r}") from None
-    except UnicodeDecodeError as e:
-        raise UserError(f"definitions file {str(path)!r} is not UTF-8 text (byte {e.start})") \
-            from None
-    except OSError as e:
-        raise UserError(f"cannot read definitions file {str(path)!r} ({e.strerror})") from None
+    text = read_text_file(p, "definitions file")
     return _load_text(Origin("file", str(p.resolve()), text), text)
 
 
