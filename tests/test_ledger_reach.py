@@ -278,3 +278,31 @@ def test_the_ledger_page_shows_the_mutation_score_and_the_survivors(tmp_path):
     md = render_ledger(pd.DataFrame([v.row()]), {"scale": "quick"}, mutation_summary(tmp_path))
     assert "quick scale, 2031\\-01\\-02" in md and "3 of the 5 mutants" in md
 
+
+
+def test_many_values_are_summarised_on_the_page_and_kept_in_the_table(monkeypatch):
+    """A closed form with more than SHOWN_VALUES named values (the §6 statistics of several
+    cells: 100+) shows on the page and in ledger.md the values its verdict reads; ledger.parquet's
+    ``values`` keeps them all. A closed form with few values shows them all."""
+    from gnibench.reports.ledger import ledger_context, render_ledger
+    from gnibench.suite.ledger import closed_forms
+
+    many = {f"v{k}": float(k) for k in range(40)}
+    monkeypatch.setitem(closed_forms.CLOSED_FORMS, "many", lambda cells, samples: dict(many))
+    monkeypatch.setitem(closed_forms.CLOSED_FORMS, "few",
+                        lambda cells, samples: {k: many[k] for k in ("v1", "v2", "v3")})
+    body = 'closed_form = "{}"\nmeasured = "v7"\npasses = "v3 < 4 and v7 < 8"\npartly = "v1 < 2"\n'
+    v = evaluate(_claim(body.format("many")), _Fake(_tables()), {})
+    assert v.verdict == "reproduced" and v.measured == 7.0
+    assert v.detail == "v1 = 1, v3 = 3, v7 = 7; 37 more values in ledger.parquet (column values)"
+    row = v.row()
+    assert all(f"v{k} = {k}," in row["values"] + "," for k in range(40))
+    table = pd.DataFrame([row])
+    md = render_ledger(table, {"scale": "quick"})
+    assert "v7 = 7" in md and "v12 = 12" not in md and "37 more values" in md
+    extra = " ".join(x for _, x in ledger_context(table, {"scale": "quick"}, set())
+                     ["sections"][0]["rows"][0]["extra"])
+    assert "v3 = 3" in extra and "v20 = 20" not in extra
+    few = evaluate(_claim(body.format("few").replace("v7", "v2").replace("< 8", "< 3")),
+                   _Fake(_tables()), {})
+    assert few.detail == "v1 = 1, v2 = 2, v3 = 3" == few.row()["values"]

@@ -97,6 +97,7 @@ def _judge(claims, dirs, out: Path, a) -> int:
                  "expected": v.expected, "outcome": v.outcome, "unexpected": v.unexpected,
                  "measured": _jsonable(v.measured), "seed_value": v.seed_value,
                  "threshold": v.threshold, "figure": v.figure, "detail": v.detail,
+                 "values": v.values,
                  "not_measured": v.not_measured, "runs": [r.describe() for r in v.runs]}
                 for v in verdicts]
         print(json.dumps(rows, indent=1))

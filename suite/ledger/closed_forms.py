@@ -29,7 +29,8 @@ import math
 
 import numpy as np
 from gnibench.suite.cell.spec import item_id, structure
-from gnibench.suite.ledger import closed_forms_b7, closed_forms_b41, closed_forms_hlw
+from gnibench.suite.ledger import (closed_forms_b7, closed_forms_b41, closed_forms_hlw,
+                                   closed_forms_locator)
 from gnibench.suite.ledger.closed_forms_b6 import gs_section_trace
 
 #: integrals of the oscillator problems as combinations of the per-oscillator energies E_k
@@ -250,6 +251,7 @@ CLOSED_FORMS = {
 }
 CLOSED_FORMS.update(closed_forms_b7.CLOSED_FORMS)       # [B] §7.2 section statistics
 CLOSED_FORMS.update(closed_forms_b41.CLOSED_FORMS)     # [B] §4.1: the radial Kepler apsides
+CLOSED_FORMS.update(closed_forms_locator.CLOSED_FORMS)  # [B] §6.2: the located section points
 
 
 def run(name: str, cells, samples) -> dict:

@@ -42,8 +42,9 @@ measure the claims of CLAIMS.md §6 (B-6.2-a … B-6.2-q) on the section samples
   (points of one invariant curve share one level);
 * ``err_H_100``, ``err_K_100``: |H − H0|, |K − K0| at the 100th point;
 * ``p1_max``, ``p1_near``: the largest |p1| at the located points, over all of them and over
-  ‖·‖ < 10⁻² ([B]: "position of points on the section was determined with precision higher than
-  10⁻¹⁵").
+  ‖·‖ < 10⁻² (zero to round-off by construction: Hénon's trick integrates in p1 itself; [B]'s
+  "position of points on the section was determined with precision higher than 10⁻¹⁵", B-6.2-q,
+  is measured against an independent location, closed_forms_locator.py).
 
 With one selected cell the names are as above; with several, each cell's values are also named
 ``<stat>_<label>`` with its group label in lower case, non-alphanumerics replaced by ``_``.

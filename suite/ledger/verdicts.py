@@ -31,6 +31,10 @@ from gnibench.suite.ledger.entries import Claim
 from gnibench.suite.ledger.reach import NotMeasured, Run, at_sample, require_complete, runs_of
 
 SKIPPED, ERROR, NOT_MEASURED = "skipped", "error", "not measured"
+#: a closed form with more named values than this (the §6 statistics of several cells give 100+)
+#: is summarised in ``detail`` (ledger.md, the ledger page) by the values its verdict reads: those
+#: of its measured, passes and partly expressions; ``values`` (ledger.parquet) keeps them all
+SHOWN_VALUES = 12
 VERDICT_ORDER = ("reproduced", "partly", "not reproduced", "not checkable", SKIPPED, ERROR)
 
 
@@ -48,6 +52,7 @@ class Verdict:
     threshold: str
     figure: str = ""
     detail: str = ""
+    values: str = ""                                  # every named value (ledger.parquet only)
     reading: str = ""
     experiment: str = ""
     sweep: list = field(default_factory=list)
@@ -91,7 +96,7 @@ class Verdict:
                 "unexpected": self.unexpected, "measured": number,
                 "measured_text": _text(measured), "seed_value": self.seed_value,
                 "threshold": self.threshold, "figure": self.figure, "experiment": self.experiment,
-                "reading": self.reading, "detail": self.detail,
+                "reading": self.reading, "detail": self.detail, "values": self.values,
                 "sweep": "; ".join(f"{k}: {v}" for k, v in self.sweep),
                 "runs": "\n".join(dict.fromkeys(r.describe() for r in self.runs)),
                 "runs_complete": self.runs_complete,
@@ -336,13 +341,27 @@ def _judge(v: Verdict, claim: Claim, values: dict) -> Verdict:
     if v.verdict != "reproduced":
         v.miss_items = misses.failing(claim.passes, values, claim.id)
         v.failing = misses.describe(v.miss_items)
-    v.detail = detail or ", ".join(f"{k} = {_text(x)}" for k, x in values.items()
-                                   if k != "measured")
+    named = {k: x for k, x in values.items() if k != "measured"}
+    v.values = ", ".join(f"{k} = {_text(x)}" for k, x in named.items())
+    v.detail = detail or summary(claim, named)
     return v
 
 
+def summary(claim: Claim, named: dict) -> str:
+    """``k = v, ...`` of the named values, or, when there are more than ``SHOWN_VALUES``, of those
+    the verdict reads (the names of measured, passes and partly) and how many more there are."""
+    if len(named) <= SHOWN_VALUES:
+        return ", ".join(f"{k} = {_text(x)}" for k, x in named.items())
+    read = set().union(*(expressions.parse(text, claim.id).names
+                         for text in (claim.measured, claim.passes, claim.partly) if text))
+    shown = [k for k in named if k in read]
+    return (", ".join(f"{k} = {_text(named[k])}" for k in shown)
+            + f"{'; ' if shown else ''}{len(named) - len(shown)} more values in ledger.parquet "
+              "(column values)")
+
+
 def _sweep(v: Verdict, claim: Claim, reader: _Reader) -> Verdict:
-    points, ranked, unmeasured = [], [], []
+    points, ranked, unmeasured, swept = [], [], [], []
     if claim.how == "closed_form":
         chosen = reader.chosen(claim.cells)
     else:
@@ -357,11 +376,13 @@ def _sweep(v: Verdict, claim: Claim, reader: _Reader) -> Verdict:
             unmeasured.append(f"{claim.sweep} {key}: {e}")
         else:
             _judge(point, claim, values)
+            swept.append(f"{claim.sweep} {key}: {point.values}")
             if point.verdict != "reproduced":   # closest among the points that fail
                 ranked.append((misses.closeness(point.miss_items), key, point))
             points.append((key, f"{point.verdict} ({_text(point.measured)})"))
         v.sweep.append((key, point.verdict))
     v.runs = reader.runs
+    v.values = "; ".join(swept)
     verdicts = [s for _, s in v.sweep]
     v.verdict = ("reproduced" if all(s == "reproduced" for s in verdicts) else
                  "not reproduced" if all(s == "not reproduced" for s in verdicts) else "partly")
