@@ -156,6 +156,38 @@ def test_good_numba_settings_are_accepted(name, text, tmp_path):
     assert not (tmp_path / "new").exists()            # checked, not created
 
 
+@pytest.mark.parametrize("value", [":::", "", " : ", ":"])
+def test_empty_gnibench_load_entries_are_skipped(value, capsys, monkeypatch):
+    """Empty entries are skipped (``GNIBENCH_LOAD="$GNIBENCH_LOAD:defs.toml"`` with the variable
+    unset starts with one); nothing is loaded, nothing is said."""
+    from gnibench.suite.cell.user import loader
+
+    monkeypatch.setattr(loader, "_discovered", False)
+    monkeypatch.setenv("GNIBENCH_LOAD", value)
+    assert loader.load_paths() == []
+    code, out, err = run(["list", "methods"], capsys)
+    assert code == 0 and err == "" and "rk4" in out
+
+
+@pytest.mark.parametrize("entry", ["missing.toml", "{dir}", "{file}"])
+@pytest.mark.parametrize("command", [["list", "methods"], SOLVE, ["run", "quick", "-j", "1"]])
+def test_a_bad_gnibench_load_entry_is_one_line_before_work(entry, command, capsys, monkeypatch,
+                                                           tmp_path):
+    from gnibench.suite.cell.user import loader
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "file.toml").write_text("not = toml = at all\n")
+    entry = entry.format(dir=tmp_path, file=tmp_path / "file.toml")
+    monkeypatch.setattr(loader, "_discovered", False)
+    monkeypatch.setenv("GNIBENCH_LOAD", f"::{entry}:")
+    before = set(tmp_path.iterdir())
+    code, out, err = run(command, capsys)
+    line = one_error_line(code, err)
+    assert line.startswith("gnibench: error: GNIBENCH_LOAD: ") and Path(entry).name in line
+    assert out == "" and set(tmp_path.iterdir()) == before
+    assert not loader._discovered                       # the next call says so again
+
+
 def test_cells_that_ended_in_error_are_computed_again(tmp_path, capsys, monkeypatch):
     """An unexpected failure is not a result of a cell's inputs: the next run computes the cell
     again (the tables then hold the new part, not the one in error read at the start)."""
