@@ -119,6 +119,75 @@ def test_disabled_jit_is_refused_before_work(capsys, monkeypatch, tmp_path):
     assert run(SOLVE, capsys)[0] == 0
 
 
+BAD_NUMBA = [("NUMBA_DISABLE_JIT", "x"), ("NUMBA_DISABLE_JIT", ""), ("NUMBA_DISABLE_JIT", "2"),
+             ("NUMBA_OPT", "x"), ("NUMBA_OPT", "4"), ("NUMBA_OPT", ""), ("NUMBA_OPT", " 3"),
+             ("NUMBA_NUM_THREADS", "x"), ("NUMBA_NUM_THREADS", "0"), ("NUMBA_NUM_THREADS", "-1"),
+             ("NUMBA_NUM_THREADS", "1_0"), ("NUMBA_NUM_THREADS", "١"), ("NUMBA_NUM_THREADS", ""),
+             ("NUMBA_BOUNDSCHECK", "x"), ("NUMBA_BOUNDSCHECK", "2"),
+             ("NUMBA_CACHE_DIR", "{file}"), ("NUMBA_CACHE_DIR", "{file}/sub"),
+             ("NUMBA_CACHE_DIR", " "), ("NUMBA_CACHE_DIR", "{dangling}")]
+
+
+@pytest.mark.parametrize("name, text", BAD_NUMBA)
+def test_bad_numba_settings_are_refused_before_numba_reads_them(name, text, tmp_path):
+    """numba printed its own multi-line warning (a traceback inside a RuntimeWarning) and went on
+    with its default, exit 0; NUMBA_NUM_THREADS=0 was a traceback; a NUMBA_CACHE_DIR that is a
+    file was ignored without a word. Run in a fresh process: numba reads them when imported."""
+    (tmp_path / "file").write_text("")
+    (tmp_path / "dangling").symlink_to(tmp_path / "nowhere")
+    value = text.format(file=tmp_path / "file", dangling=tmp_path / "dangling")
+    out_path = tmp_path / "x.csv"
+    env = {**os.environ, name: value}
+    p = subprocess.run([GNIBENCH, *SOLVE, "-o", str(out_path)], capture_output=True, text=True,
+                       env=env, check=False)
+    line = one_error_line(p.returncode, p.stderr)
+    assert f"bad {name}=" in line and "allowed:" in line
+    assert not out_path.exists()
+
+
+@pytest.mark.parametrize("name, text", [("NUMBA_DISABLE_JIT", " 0"), ("NUMBA_OPT", "max"),
+                                        ("NUMBA_OPT", "0"), ("NUMBA_NUM_THREADS", "3"),
+                                        ("NUMBA_BOUNDSCHECK", "0"), ("NUMBA_CACHE_DIR", ""),
+                                        ("NUMBA_CACHE_DIR", "{tmp}/new/numba")])
+def test_good_numba_settings_are_accepted(name, text, tmp_path):
+    from gnibench.suite.foundation.numba_settings import check_numba_settings
+
+    check_numba_settings({name: text.format(tmp=tmp_path)})
+    assert not (tmp_path / "new").exists()            # checked, not created
+
+
+@pytest.mark.parametrize("value", [":::", "", " : ", ":"])
+def test_empty_gnibench_load_entries_are_skipped(value, capsys, monkeypatch):
+    """Empty entries are skipped (``GNIBENCH_LOAD="$GNIBENCH_LOAD:defs.toml"`` with the variable
+    unset starts with one); nothing is loaded, nothing is said."""
+    from gnibench.suite.cell.user import loader
+
+    monkeypatch.setattr(loader, "_discovered", False)
+    monkeypatch.setenv("GNIBENCH_LOAD", value)
+    assert loader.load_paths() == []
+    code, out, err = run(["list", "methods"], capsys)
+    assert code == 0 and err == "" and "rk4" in out
+
+
+@pytest.mark.parametrize("entry", ["missing.toml", "{dir}", "{file}"])
+@pytest.mark.parametrize("command", [["list", "methods"], SOLVE, ["run", "quick", "-j", "1"]])
+def test_a_bad_gnibench_load_entry_is_one_line_before_work(entry, command, capsys, monkeypatch,
+                                                           tmp_path):
+    from gnibench.suite.cell.user import loader
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "file.toml").write_text("not = toml = at all\n")
+    entry = entry.format(dir=tmp_path, file=tmp_path / "file.toml")
+    monkeypatch.setattr(loader, "_discovered", False)
+    monkeypatch.setenv("GNIBENCH_LOAD", f"::{entry}:")
+    before = set(tmp_path.iterdir())
+    code, out, err = run(command, capsys)
+    line = one_error_line(code, err)
+    assert line.startswith("gnibench: error: GNIBENCH_LOAD: ") and Path(entry).name in line
+    assert out == "" and set(tmp_path.iterdir()) == before
+    assert not loader._discovered                       # the next call says so again
+
+
 def test_cells_that_ended_in_error_are_computed_again(tmp_path, capsys, monkeypatch):
     """An unexpected failure is not a result of a cell's inputs: the next run computes the cell
     again (the tables then hold the new part, not the one in error read at the start)."""

@@ -21,9 +21,10 @@ GNIBENCH = [str(Path(sys.executable).with_name("gnibench"))]
 SOLVE = ["solve", "kepler-2d", "rk4:h=0.01", "--steps", "300", "--every", "100"]
 
 
-def _solve(cache: Path, args=SOLVE) -> subprocess.CompletedProcess:
+def _solve(cache: Path, args=SOLVE, **env) -> subprocess.CompletedProcess:
+    env = {**os.environ, "GNIBENCH_CACHE_DIR": str(cache), **env}
     return subprocess.run(GNIBENCH + list(args), capture_output=True, text=True, check=False,
-                          env={**os.environ, "GNIBENCH_CACHE_DIR": str(cache)})
+                          env=env)
 
 
 @pytest.fixture
@@ -34,14 +35,14 @@ def warm(tmp_path):
     return tmp_path, first.stdout
 
 
-def _check_rebuilt(cache: Path, expected: str, what: str, args=SOLVE) -> None:
-    again = _solve(cache, args)
+def _check_rebuilt(cache: Path, expected: str, what: str, args=SOLVE, **env) -> None:
+    again = _solve(cache, args, **env)
     assert again.returncode == 0, again.stderr
     assert "Traceback" not in again.stderr
     warnings = [ln for ln in again.stderr.splitlines() if ln.startswith("gnibench: warning:")]
     assert len(warnings) == 1 and what in warnings[0], again.stderr
     assert again.stdout == expected
-    third = _solve(cache, args)                      # rebuilt: clean from now on
+    third = _solve(cache, args, **env)               # rebuilt: clean from now on
     assert third.stderr == "" and third.stdout == expected
 
 
@@ -120,3 +121,31 @@ def test_manifest_lists_every_compiled_file(warm):
     listed = json.loads((pycache / f"{stem}.manifest.json").read_text())
     files = {p.name for p in pycache.glob(f"{stem}.*") if re.search(r"\.nb[ic]$", p.name)}
     assert files and set(listed) == files
+
+
+def test_numba_cache_dir_is_where_numba_puts_the_files(tmp_path, monkeypatch):
+    """numba_cache_path follows numba's own locator (numba/core/caching.py), with and without
+    NUMBA_CACHE_DIR."""
+    from gnibench.suite.foundation.cache import numba_cache_path
+    from numba.core.caching import _CacheLocator
+
+    module = tmp_path / "kernels" / "cell_x.py"
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    assert numba_cache_path(module) == tmp_path / "kernels" / "__pycache__"
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "numba"))
+    sub = _CacheLocator.get_suitable_cache_subpath(str(module))
+    assert numba_cache_path(module) == tmp_path / "numba" / sub
+
+
+def test_files_under_numba_cache_dir_are_checked_too(tmp_path):
+    """With NUMBA_CACHE_DIR set numba writes the compiled files there, not beside the kernel
+    modules: they are recorded and checked there (before, a flipped byte went unseen)."""
+    cache, numba_dir = tmp_path / "cache", tmp_path / "numba"
+    first = _solve(cache, NUMBA_CACHE_DIR=str(numba_dir))
+    assert first.returncode == 0 and first.stderr == "", first.stderr
+    stem = _cell_module(cache).stem
+    nbc = min(numba_dir.glob(f"*/{stem}.step-*.nbc"))
+    raw = bytearray(nbc.read_bytes())
+    raw[len(raw) // 2] ^= 0xFF
+    nbc.write_bytes(bytes(raw))
+    _check_rebuilt(cache, first.stdout, "compiled kernel", NUMBA_CACHE_DIR=str(numba_dir))

@@ -125,10 +125,14 @@ def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
             if len(comp) > 1 or v in graph.get(v, ()):
                 out.append(sorted(comp))
 
+    limit = sys.getrecursionlimit()
     sys.setrecursionlimit(10000)
-    for v in sorted(graph):
-        if v not in index:
-            visit(v)
+    try:
+        for v in sorted(graph):
+            if v not in index:
+                visit(v)
+    finally:       # kept raised, it let later tests in the process parse deeper expressions
+        sys.setrecursionlimit(limit)
     return out
 
 

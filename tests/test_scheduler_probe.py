@@ -2,6 +2,7 @@
 timeout for the whole exchange, before the output directory exists (issue 18, Dask cases)."""
 from __future__ import annotations
 
+import contextlib
 import socket
 import subprocess
 import sys
@@ -77,6 +78,70 @@ def test_a_server_of_another_protocol_is_not_a_scheduler(peer, tmp_path, capsys)
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1 and "Dask" in err[0], err
     assert not out.exists()
+
+
+class LinePeer(Peer):
+    """A server of a line-based protocol (Redis, SMTP): it answers only once the client has sent
+    a line."""
+
+    def _serve(self):
+        while True:
+            try:
+                conn, _ = self.sock.accept()
+            except OSError:
+                return
+            self.connections.append(conn)
+            threading.Thread(target=self._answer, args=(conn,), daemon=True).start()
+
+    def _answer(self, conn):
+        got = b""
+        with contextlib.suppress(OSError):
+            while b"\n" not in got:
+                chunk = conn.recv(4096)
+                if not chunk:
+                    return
+                got += chunk
+            conn.sendall(b"-ERR unknown command\r\n")
+
+
+def test_servers_that_wait_for_the_client_are_told_at_once():
+    """The probe waited for the peer to speak first: an HTTP server, waiting for a request, took
+    the whole timeout ("sent nothing within 10 s"). The probe now sends Dask's handshake first
+    (both ends of a Dask connection send theirs at once), whose last key ends a line: such a
+    server answers, and the answer is not Dask's (the timeout, 60 s here, is never reached)."""
+    from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+
+    class Quiet(BaseHTTPRequestHandler):
+        def log_message(self, *args):
+            pass
+
+    http = ThreadingHTTPServer(("127.0.0.1", 0), Quiet)
+    threading.Thread(target=http.serve_forever, daemon=True).start()
+    line = LinePeer(None)
+    try:
+        for address in (f"tcp://127.0.0.1:{http.server_address[1]}", line.address):
+            with pytest.raises(UserError, match="does not speak Dask's protocol"):
+                probe(address, timeout=SAFETY)
+    finally:
+        http.shutdown()
+        http.server_close()
+        line.close()
+
+
+def test_the_probe_sends_a_handshake_dask_can_read():
+    """What the probe sends first is one framed message that distributed decodes as a handshake
+    (distributed/comm/tcp.py: the 8-byte length, then the frames)."""
+    import struct
+
+    from distributed.protocol import loads
+    from distributed.protocol.utils import unpack_frames
+    from gnibench.suite.runs.scheduler import _handshake
+
+    data = _handshake()
+    (length,) = struct.unpack("<Q", data[:8])
+    assert length == len(data) - 8
+    info = loads(unpack_frames(data[8:]))
+    assert {"compression", "python", "pickle-protocol"} <= set(info)
 
 
 def test_a_closed_port_fails_at_once_and_creates_nothing(tmp_path, capsys):

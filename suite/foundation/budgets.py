@@ -21,6 +21,7 @@ import math
 import os
 
 from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.numba_settings import check_numba_settings
 from gnibench.suite.foundation.numbers import INT_LIMIT, parse_int
 
 __all__ = ["INT_LIMIT", "check_count", "check_integer", "check_limits", "check_output", "limit"]
@@ -39,14 +40,12 @@ def limit(name: str) -> int:
 
 
 def check_limits() -> None:
-    """Refuse, before any work, a budget variable that is set but not a number, and numba's
-    NUMBA_DISABLE_JIT (the kernels must be compiled: every cell would end in error)."""
+    """Refuse, before any work, a budget variable that is set but not a number, and a bad value
+    of a numba setting gnibench depends on (:mod:`gnibench.suite.foundation.numba_settings`:
+    NUMBA_DISABLE_JIT=1 would make every cell end in error)."""
     for name in _DEFAULTS:
         limit(name)
-    jit = os.environ.get("NUMBA_DISABLE_JIT", "").strip()
-    if jit.isdigit() and int(jit) != 0:         # numba reads it as an int, ignoring the rest
-        raise UserError(f"bad NUMBA_DISABLE_JIT={jit}: gnibench's kernels are compiled by numba; "
-                        "allowed: unset or 0")
+    check_numba_settings()
 
 
 def check_count(value: float, what: str, budget: str, unit: str) -> None:

@@ -5,10 +5,11 @@
 Nothing read from the cache is trusted blindly. Every entry gnibench writes carries a checksum
 recorded when it was written (:func:`write_checked`: a ``<name>.sha256`` file beside it) and is
 verified when read (:func:`read_checked`). numba writes its own cache files (``__pycache__`` beside
-each generated module); their checksums are recorded in a manifest after they are written
-(:func:`record_numba_files`) and verified before the module is imported
-(:func:`verify_numba_files`). A corrupt or tampered entry is discarded with one warning line on
-stderr and rebuilt; it never gives a traceback or a wrong number.
+each generated module, or under ``NUMBA_CACHE_DIR``: :func:`numba_cache_path`); their checksums
+are recorded in a manifest after they are written (:func:`record_numba_files`) and verified
+before the module is imported (:func:`verify_numba_files`). A corrupt or tampered entry is
+discarded with one warning line on stderr and rebuilt; it never gives a traceback or a wrong
+number.
 """
 from __future__ import annotations
 
@@ -167,8 +168,21 @@ def discard(path: Path) -> None:
 
 # -- numba's cache files of a generated module --------------------------------------------------
 
+def numba_cache_path(module_path: Path) -> Path:
+    """Where numba writes the compiled files of a module: ``__pycache__`` beside it, or, with
+    ``NUMBA_CACHE_DIR`` set (checked by :mod:`~gnibench.suite.foundation.numba_settings`),
+    ``DIR/<name of the module's directory>_<sha1 of its path>`` as numba's
+    ``UserProvidedCacheLocator`` computes it (``numba/core/caching.py``)."""
+    given = os.environ.get("NUMBA_CACHE_DIR", "")
+    if not given:
+        return Path(module_path).parent / "__pycache__"
+    parent = os.path.dirname(os.path.abspath(module_path))
+    sub = f"{os.path.basename(parent)}_{hashlib.sha1(parent.encode()).hexdigest()}"
+    return Path(given) / sub
+
+
 def _numba_files(module_path: Path) -> list[Path]:
-    d = module_path.parent / "__pycache__"
+    d = numba_cache_path(module_path)
     if not d.is_dir():
         return []
     return sorted(p for p in d.glob(f"{module_path.stem}.*") if p.suffix in (".nbi", ".nbc"))
@@ -184,10 +198,10 @@ def verify_numba_files(module_path: Path) -> None:
     module's cache files are discarded (one warning line) and numba recompiles. Files the manifest
     does not list (a compilation killed before it was recorded) are removed silently."""
     module_path = Path(module_path)
-    pycache = module_path.parent / "__pycache__"
-    if pycache.is_symlink() or pycache.exists() and not pycache.is_dir():
-        warn(f"cache entry {pycache} is not a directory; removed")
-        discard(pycache)
+    for d in dict.fromkeys((module_path.parent / "__pycache__", numba_cache_path(module_path))):
+        if d.is_symlink() or d.exists() and not d.is_dir():
+            warn(f"cache entry {d} is not a directory; removed")
+            discard(d)
     files = _numba_files(module_path)
     if not files:
         return
@@ -234,4 +248,5 @@ def record_numba_files(module_path: Path) -> None:
             return
     except (OSError, ValueError):
         pass
+    path.parent.mkdir(exist_ok=True)      # numba's files may be under NUMBA_CACHE_DIR
     write_atomic(path, json.dumps(listed, sort_keys=True))

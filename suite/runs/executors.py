@@ -141,8 +141,27 @@ def _dask(groups, jobs, scheduler) -> Iterator[CellOutcome]:
 
         # Ctrl-C: the workers are stopped mid-cell; Dask's warnings about that are no news
         logging.getLogger("distributed").setLevel(logging.ERROR)
+        if cluster is not None:
+            _kill_workers(cluster)
         raise
     finally:
         client.close()
         if cluster is not None:
             cluster.close(timeout=5)
+
+
+def _kill_workers(cluster) -> None:
+    """A run that ends early (Ctrl-C, SIGTERM, an error): the worker processes of our own
+    LocalCluster are killed at once, their cells abandoned (a cell is stored by this process when
+    its outcome arrives, so a worker holds nothing to keep). ``cluster.close`` alone asks each busy
+    worker to finish and then waits: measured 3.9-4.1 s with two cells running, 0.01 s once the
+    workers are killed. Each nanny is told first that its worker is going away for good, else it
+    would start another one."""
+    for nanny in list(cluster.workers.values()):
+        try:
+            nanny.close_gracefully()          # the nanny no longer restarts its worker
+            process = nanny.process.process
+            if process.is_alive():
+                os.kill(process.pid, signal.SIGKILL)
+        except (AttributeError, OSError):   # not started, or gone already
+            pass

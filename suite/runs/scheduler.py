@@ -7,9 +7,14 @@ without a limit for a peer that accepts and never answers (measured: 62 s), and 
 three steps, each failing with one line:
 
 1. a TCP connection (``tcp://`` addresses): refused or unreachable at once;
-2. the first 8 bytes the peer sends: a Dask peer sends its handshake as soon as the connection is
-   made, a little-endian message length followed by that many bytes; silence, or a length no
-   handshake has (> 64 MiB: someone else's protocol), is not a Dask scheduler;
+2. Dask's handshake, sent by the probe, and the first 8 bytes the peer sends. Both ends of a Dask
+   connection send their handshake as soon as it is made, then read the other's
+   (``distributed/comm/core.py``: ``connect`` and ``Listener.on_connection``), each a framed
+   message: a little-endian length followed by that many bytes (``comm/tcp.py``). Sending ours
+   first costs a Dask peer nothing, and a server that waits for its client to speak (HTTP)
+   answers at once, usually with an error (before, it took the whole timeout). Silence, a
+   closed connection, or a length no handshake has (> 64 MiB: someone else's protocol, e.g.
+   ``HTTP/1.0``) is not a Dask scheduler;
 3. a Dask connection (``distributed.comm.connect``) and an ``identity`` request, whose answer
    must be a scheduler's.
 
@@ -20,8 +25,10 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import pickle
 import socket
 import struct
+import sys
 import threading
 import time
 
@@ -36,6 +43,21 @@ def _bad(address: str, why: str) -> UserError:
                      f"scheduler, e.g. tcp://127.0.0.1:8786")
 
 
+def _handshake() -> bytes:
+    """Dask's handshake as ``distributed.comm.connect`` sends it over TCP: the framed msgpack of
+    ``Comm.handshake_info()`` (compression, Python version, pickle protocol), plus one key of our
+    own, which the peer ignores (it reads only the pickle protocol and the compression). Its
+    value ends in CRLF: the end of a line for line-based protocols (HTTP, SMTP), whose servers
+    then answer instead of waiting for the rest of a request."""
+    from distributed.protocol import dumps
+    from distributed.protocol.utils import pack_frames
+
+    info = {"compression": None, "python": tuple(sys.version_info)[:3],
+            "pickle-protocol": pickle.HIGHEST_PROTOCOL, "gnibench": "probe\r\n"}
+    body = pack_frames(dumps(info))
+    return struct.pack("<Q", len(body)) + body
+
+
 def _tcp_first_bytes(address: str, host: str, port: int, deadline: float) -> None:
     try:
         sock = socket.create_connection((host, port), timeout=max(deadline - time.monotonic(),
@@ -45,6 +67,13 @@ def _tcp_first_bytes(address: str, host: str, port: int, deadline: float) -> Non
     except OSError as e:
         raise _bad(address, f"cannot connect ({e.strerror or e})") from None
     with sock:
+        try:
+            sock.sendall(_handshake())
+        except TimeoutError:
+            raise _bad(address, f"the peer took nothing within {TIMEOUT:g} s "
+                                f"(not a Dask scheduler?)") from None
+        except OSError as e:
+            raise _bad(address, f"the connection failed ({e.strerror or e})") from None
         head = b""
         while len(head) < 8:
             sock.settimeout(max(deadline - time.monotonic(), 0.01))

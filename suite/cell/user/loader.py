@@ -4,9 +4,10 @@
   an experiment's ``load = [...]``, ``gnibench.load(path)``). All its entries are built and
   checked first, then registered together; nothing is registered when one fails.
 * :func:`discover` loads, once per process, the files of ``GNIBENCH_LOAD`` (paths separated by
-  ``:``) and the entry points of the groups ``gnibench.problems`` and ``gnibench.methods``. An
-  entry point names a definition table (a dict with the keys of a file's entry; ``id`` defaults to
-  the entry point's name), a list of them, or a function returning either.
+  ``:``, empty entries skipped: :func:`load_paths`) and the entry points of the groups
+  ``gnibench.problems`` and ``gnibench.methods``. An entry point names a definition table (a
+  dict with the keys of a file's entry; ``id`` defaults to the entry point's name), a list of
+  them, or a function returning either.
 
 Every record carries its :class:`Origin` (the file's path and text, or the entry point), so a
 worker process that lacks it (a Dask worker started by spawn) defines it before resolving a
@@ -70,15 +71,31 @@ def discover() -> None:
     global _discovered
     if _discovered:
         return
-    _discovered = True
-    for path in os.environ.get(ENV, "").split(os.pathsep):       # ":" (";" on Windows)
-        if path.strip():
-            load(path.strip())
-    from importlib.metadata import entry_points
+    _discovered = True                  # also while loading: a file's entries may look ids up
+    try:
+        for path in load_paths():
+            try:
+                load(path)
+            except UserError as e:
+                raise UserError(f"{ENV}: {e}") from None
+        from importlib.metadata import entry_points
 
-    for group in GROUPS:
-        for ep in entry_points(group=group):
-            _load_entry_point(group, ep.name)
+        for group in GROUPS:
+            for ep in entry_points(group=group):
+                _load_entry_point(group, ep.name)
+    except BaseException:
+        _discovered = False             # the next call tries again (and says so again)
+        raise
+
+
+def load_paths(value: str | None = None) -> list[str]:
+    """The files named by ``GNIBENCH_LOAD`` (or ``value``): entries separated by ``:`` (``;`` on
+    Windows), blanks around an entry ignored. Empty entries (``::``, a leading or trailing
+    ``:``) are skipped, so that ``GNIBENCH_LOAD="$GNIBENCH_LOAD:defs.toml"`` works whether it was
+    set or not (unlike PATH, where an empty entry is the current directory); every other entry
+    must be a definitions file (a missing one is an error, not skipped)."""
+    value = os.environ.get(ENV, "") if value is None else value
+    return [p.strip() for p in value.split(os.pathsep) if p.strip()]
 
 
 def loaded() -> dict[str, list[tuple[str, str]]]:
