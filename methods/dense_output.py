@@ -17,6 +17,7 @@ from dataclasses import dataclass
 from fractions import Fraction
 
 from gnibench.methods import order_conditions as oc
+from gnibench.methods.explicit_rk import lincomb
 from gnibench.methods.tableau import lit, require, verdict
 
 # -- order conditions (trees and densities: methods/order_conditions.py) -------------------------
@@ -162,13 +163,12 @@ class DenseOutput:
 # -- code generation --------------------------------------------------------------------------------
 
 
-def _stage_lines(dense: DenseOutput, tab, count: int, hairer: bool) -> tuple[list[str], set[int]]:
+def _stage_lines(dense: DenseOutput, tab, count: int, hairer: bool, n: int) -> list[str]:
     """The head of ``dense_from_stages``: the step's ``count`` stages unpacked, f(y1) as the last
     stage (always in Hairer's form; for polynomial weights when the pair is FSAL, and for every
-    extra stage that is f(y1)), the extra stages evaluated; and the ``erk_lc`` arities used."""
+    extra stage that is f(y1)), the extra stages evaluated."""
     s = tab.stages
     a_all = dense.stages_a(tab)
-    arities: set[int] = set()
     unpack = ", ".join(f"k{j}" for j in range(count)) + ("," if count == 1 else "")
     lines = ["\n@njit(cache=True)\ndef dense_from_stages(y, y1, h, par, ks, f1):", f"    {unpack} = ks"]
     if hairer or count < s:
@@ -177,16 +177,14 @@ def _stage_lines(dense: DenseOutput, tab, count: int, hairer: bool) -> tuple[lis
         if not hairer and dense.is_f1(i - s, tab):
             lines.append(f"    k{i} = f1")
             continue
-        terms = [(a_all[i][j], j) for j in range(i) if a_all[i][j] != 0]
-        arities.add(len(terms))
-        args = ", ".join(f"{lit(c)}, k{j}" for c, j in terms)
-        lines.append(f"    k{i} = f(erk_lc{len(terms)}(y, h, {args}), par)")
-    return lines, arities
+        terms = [(a_all[i][j], f"k{j}") for j in range(i) if a_all[i][j] != 0]
+        lines.append(f"    k{i} = f({lincomb('y', 'h', terms, n)}, par)")
+    return lines
 
 
-def generate_dense(dense: DenseOutput, tab, count: int, n: int) -> tuple[str, set[int]]:
+def generate_dense(dense: DenseOutput, tab, count: int, n: int) -> str:
     """Source of ``dense_from_stages``, ``dense_eval`` and ``dense_slope`` for an n-dimensional
-    cell, and the arities of the ``erk_lc`` helpers it uses.
+    cell.
 
     ``dense_from_stages(y, y1, h, par, ks, f1)`` takes the ``count`` stages the step computed
     (``ks``) and f(y1), evaluates the extra stages, and returns the coefficients (y0, F0, F1, ...).
@@ -196,7 +194,7 @@ def generate_dense(dense: DenseOutput, tab, count: int, n: int) -> tuple[str, se
     if dense.polynomial:
         return _generate_polynomial(dense, tab, count, n)
     s, comma = tab.stages, "," if n == 1 else ""
-    lines, arities = _stage_lines(dense, tab, count, hairer=True)
+    lines = _stage_lines(dense, tab, count, True, n)
 
     def tup(items):
         return "(" + ", ".join(items) + comma + ")"
@@ -234,7 +232,7 @@ def generate_dense(dense: DenseOutput, tab, count: int, n: int) -> tuple[str, se
             lines += [f"    v = c{r + 1}[{i}] + s", f"    ds = {sign}v + {w} * ds", f"    s = {w} * v"]
         lines.append(f"    du{i} = ds")
     lines.append("    return " + tup(f"du{i}" for i in range(n)))
-    return "\n".join(lines) + "\n", arities
+    return "\n".join(lines) + "\n"
 
 
 def _quotients(dense: DenseOutput, tab) -> list[list]:
@@ -257,13 +255,13 @@ def _quotients(dense: DenseOutput, tab) -> list[list]:
     return out
 
 
-def _generate_polynomial(dense: DenseOutput, tab, count: int, n: int) -> tuple[str, set[int]]:
+def _generate_polynomial(dense: DenseOutput, tab, count: int, n: int) -> str:
     """The same three functions for polynomial weights, in the form
     u(θ) = y0 + θ (y1 - y0) + θ (θ - 1) Σ_k θ^k G_k,  G_k = h Σ_j q_jk K_j  (:func:`_quotients`),
     so that u(1) = y1 to round-off whatever the size of Verner's weights (Vern6's reach 1.2e5 and
     cancel to b_j: summed at θ = 1 in doubles they miss y1 by 8e-13 per step)."""
     comma = "," if n == 1 else ""
-    lines, arities = _stage_lines(dense, tab, count, hairer=False)
+    lines = _stage_lines(dense, tab, count, False, n)
 
     def tup(items):
         return "(" + ", ".join(items) + comma + ")"
@@ -292,4 +290,4 @@ def _generate_polynomial(dense: DenseOutput, tab, count: int, n: int) -> tuple[s
              f"({dhorner(i)})") if m > 1 else (lambda i: f"dy[{i}] + (2.0 * theta - 1.0) * g0[{i}]")
     lines += ["\n@njit(cache=True)\ndef dense_slope(cf, theta):", f"    {cf} = cf",
               "    return " + tup(slope(i) for i in range(n))]
-    return "\n".join(lines) + "\n", arities
+    return "\n".join(lines) + "\n"

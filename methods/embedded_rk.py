@@ -25,7 +25,7 @@ from gnibench.methods.events import (
     root_functions,
     variant,
 )
-from gnibench.methods.explicit_rk import combination, generate_erk, helpers, increment, stage_lines
+from gnibench.methods.explicit_rk import combination, generate_erk, increment, stage_lines
 from gnibench.methods.kernels import adaptive
 from gnibench.methods.kernels import pair as pair_kernel
 from gnibench.methods.summation import compensated
@@ -172,16 +172,14 @@ def generate_adaptive(data: Pair):
     def generate(ctx) -> str:
         n, s, tab = ctx.n, data.tab.stages, data.tab
         count = s - 1 if data.fsal else s
-        stages, arities = stage_lines(tab, count, first="k0")
+        stages = stage_lines(tab, count, n, first="k0")
         fsal = data.fsal and not data.lazy_last
         knew = f"k{s - 1}" if fsal else "k0"  # else the loop evaluates f(y1) once accepted
-        increments = set()
         if compensated(ctx.values):     # the increment h Σ b_i k_i added with the carried error
-            inc, k = increment(tab.doubles[1])
-            increments.add(k)
+            inc = increment(tab.doubles[1], n)
             new_y, carry = [f"    y1, e1 = carry_add(y, e, {inc})"], "e1"
         else:
-            new_y, carry = [f"    y1 = {combination(tab.doubles[1], arities)}"], "e"
+            new_y, carry = [f"    y1 = {combination(tab.doubles[1], n)}"], "e"
         lines = (stages + new_y + ([f"    k{s - 1} = f(y1, par)"] if fsal else [])
                  + _error_lines(data, n))
         head = "(y, e, k0, h, par, ws, rtol, atol):"
@@ -201,8 +199,7 @@ def generate_adaptive(data: Pair):
             src += variant(drive, "adaptive_section", "SECTION")
         dense_nfev = 0.0
         if data.dense is not None:            # integrate_dense and what it calls
-            dense_src, dense_arities = generate_dense(data.dense, tab, count, n)
-            arities |= dense_arities
+            dense_src = generate_dense(data.dense, tab, count, n)
             dense_nfev = float(data.dense.new_stages(tab))
             src += (dense_src + root_functions(n, sections) + dense_grid_rows()
                     + variant(drive, "integrate_dense", "DENSE_OUTPUT", "GRIDDED", "WITH_STAGES",
@@ -217,9 +214,11 @@ def generate_adaptive(data: Pair):
                   f"IORD = {data.iord}\nEXPO = {data.expo!r}\nBETA = {data.beta!r}\n"
                   f"SAFE = {data.safe!r}\nFAC1 = {data.fac1!r}\nFAC2 = {data.fac2!r}\n"
                   f"DENSE_NFEV = {dense_nfev!r}\n"
-                  f"\n@njit(cache=True)\ndef to_tuple_shift(y, h, v):\n    return ({shift}{comma})\n")
-        return (consts + helpers(n, arities, increments) + "\n".join(body) + "\n"
-                + template(adaptive.initial_step) + template(adaptive.first_step)
+                  f"\n@njit(cache=True, inline='always')\ndef to_tuple_shift(y, h, v):\n"
+                  f"    return ({shift}{comma})\n")
+        return (consts + "\n".join(body) + "\n"
+                + template(adaptive.initial_step, inline=True)
+                + template(adaptive.first_step, inline=True)
                 + _pair_functions() + src)
     return generate
 

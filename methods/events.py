@@ -51,15 +51,15 @@ def _tup(items: list[str]) -> str:
     return "(" + ", ".join(items) + ("," if len(items) == 1 else "") + ")"
 
 
-def _lincomb(n1: int, k: int) -> str:
-    """henon_lc<k>(z, h, c0, v0, ...) = z + h (c0 v0 + ...) over the n+1 components."""
-    args = ", ".join(f"c{j}, v{j}" for j in range(k))
-    comps = [f"z[{i}] + h * (" + " + ".join(f"c{j} * v{j}[{i}]" for j in range(k)) + ")"
-             for i in range(n1)]
-    return f"\n@njit(cache=True)\ndef henon_lc{k}(z, h, {args}):\n    return {_tup(comps)}\n"
+def _lincomb(z: str | None, h: str, terms, n1: int) -> str:
+    """z + h (c0 v0 + ...) over the n+1 components (z None: a zero base, 0.0 + h (...)), written
+    where it is used (not a helper function: see methods/explicit_rk.py ``lincomb``)."""
+    comps = [f"{'0.0' if z is None else f'{z}[{i}]'} + {h} * ("
+             + " + ".join(f"{lit(c)} * {v}[{i}]" for c, v in terms) + ")" for i in range(n1)]
+    return _tup(comps)
 
 
-def _run(name: str, rhs: str, n1: int, arities: set) -> str:
+def _run(name: str, rhs: str, n1: int) -> str:
     """``name(z0, d, m, par)``: m equal DOP853 substeps of dz = rhs(z) over d (unrolled)."""
     A = np.asarray(dop853.A, dtype=float)[:STAGES, :STAGES]
     B = np.asarray(dop853.B, dtype=float)
@@ -69,19 +69,15 @@ def _run(name: str, rhs: str, n1: int, arities: set) -> str:
            "    # compensated (Kahan) summation: its rounding then neither acts on z nor grows with",
            "    # m, and results with m and 2m can agree to 1e-15",
            "    hs = d / m", f"    dz = {zero}", f"    cz = {zero}",
-           "    for _ in range(m):", "        z = henon_lc1(z0, 1.0, 1.0, dz)",
+           "    for _ in range(m):", f"        z = {_lincomb('z0', '1.0', [(1.0, 'dz')], n1)}",
            f"        k0 = {rhs}(z, par)"]
     for i in range(1, STAGES):
-        terms = [(A[i, j], j) for j in range(i) if A[i, j] != 0.0]
-        arities.add(len(terms))
-        args = ", ".join(f"{lit(c)}, k{j}" for c, j in terms)
-        run.append(f"        k{i} = {rhs}(henon_lc{len(terms)}(z, hs, {args}), par)")
-    terms = [(B[j], j) for j in range(STAGES) if B[j] != 0.0]
-    arities.add(len(terms))
-    run.append(f"        inc = henon_lc{len(terms)}({zero}, hs, "
-               + ", ".join(f"{lit(c)}, k{j}" for c, j in terms) + ")")
+        terms = [(A[i, j], f"k{j}") for j in range(i) if A[i, j] != 0.0]
+        run.append(f"        k{i} = {rhs}({_lincomb('z', 'hs', terms, n1)}, par)")
+    terms = [(B[j], f"k{j}") for j in range(STAGES) if B[j] != 0.0]
+    run.append(f"        inc = {_lincomb(None, 'hs', terms, n1)}")
     run.append("        dz, cz = henon_kahan(dz, cz, inc)")
-    run.append("    return henon_lc1(z0, 1.0, 1.0, dz)")
+    run.append(f"    return {_lincomb('z0', '1.0', [(1.0, 'dz')], n1)}")
     return "\n".join(run) + "\n"
 
 
@@ -105,12 +101,11 @@ def henon_source(n: int, field: str = "f") -> str:
         "\n@njit(cache=True)\ndef henon_slope(y, par):",
         "    # grad g . F = dg/dt along the flow",
         f"    F = {field}(y, par)", "    G = section_grad_0(y, par)", f"    return {dot}",
-        "\n@njit(cache=True)\ndef henon_state(z):", f"    return {ys}",
-        "\n@njit(cache=True)\ndef henon_join(y, t):",
+        "\n@njit(cache=True, inline='always')\ndef henon_state(z):", f"    return {ys}",
+        "\n@njit(cache=True, inline='always')\ndef henon_join(y, t):",
         "    return " + _tup([f"y[{i}]" for i in range(n)] + ["t"])]
-    arities = {1}
-    runs = _run("henon_run", "henon_rhs", n1, arities) + _run("flow_run", "flow_rhs", n1, arities)
-    kahan = ["\n@njit(cache=True)\ndef henon_kahan(s, c, x):",
+    runs = _run("henon_run", "henon_rhs", n1) + _run("flow_run", "flow_rhs", n1)
+    kahan = ["\n@njit(cache=True, inline='always')\ndef henon_kahan(s, c, x):",
              "    # s + x with the running compensation c (Kahan summation)"]
     for i in range(n1):
         kahan += [f"    x{i} = x[{i}] - c[{i}]", f"    s{i} = s[{i}] + x{i}",
@@ -119,7 +114,7 @@ def henon_source(n: int, field: str = "f") -> str:
                  + _tup([f"c{i}" for i in range(n1)]))
     return (f"\nHENON_RTOL = {HENON_RTOL!r}\nHENON_MAX_SUBSTEPS = {HENON_MAX_SUBSTEPS}\n"
             f"HENON_STAGES = {float(STAGES)!r}\nHENON_WALK_MAX = {HENON_WALK_MAX}\n"
-            + "".join(_lincomb(n1, k) for k in sorted(arities)) + "\n".join(kahan) + "\n"
+            + "\n".join(kahan) + "\n"
             + "\n".join(helpers) + "\n" + runs
             + template(events.henon_converge) + template(events.henon_locate))
 
@@ -127,15 +122,17 @@ def henon_source(n: int, field: str = "f") -> str:
 def root_functions(n: int, section: bool) -> str:
     """The value/slope pairs of the dense-output roots: the grid time always, g when the problem
     has a section; and the two renamed copies of ``dense_root`` that use them."""
-    src = ("\n@njit(cache=True)\ndef time_value(u, par, tc, tk):\n    return u[tc] - tk\n"
-           "\n@njit(cache=True)\ndef time_slope(u, du, par, tc):\n    return du[tc]\n"
+    src = ("\n@njit(cache=True, inline='always')\ndef time_value(u, par, tc, tk):\n"
+           "    return u[tc] - tk\n"
+           "\n@njit(cache=True, inline='always')\ndef time_slope(u, du, par, tc):\n"
+           "    return du[tc]\n"
            + template(events.dense_root, {"dense_root": "dense_root_time",
                                           "ROOT_VALUE": "time_value", "ROOT_SLOPE": "time_slope"}))
     if section:
         dot = " + ".join(f"G[{i}] * du[{i}]" for i in range(n))
-        src += ("\n@njit(cache=True)\ndef sec_value(u, par, tc, tk):\n"
+        src += ("\n@njit(cache=True, inline='always')\ndef sec_value(u, par, tc, tk):\n"
                 "    return section_g_0(u, par)\n"
-                "\n@njit(cache=True)\ndef sec_slope(u, du, par, tc):\n"
+                "\n@njit(cache=True, inline='always')\ndef sec_slope(u, du, par, tc):\n"
                 f"    G = section_grad_0(u, par)\n    return {dot}\n"
                 + template(events.dense_root, {"ROOT_VALUE": "sec_value",
                                                "ROOT_SLOPE": "sec_slope"}))
@@ -173,28 +170,28 @@ def grid_functions(family: str, partial: str) -> str:
     return (template(events.partial_sample, {"partial_sample": ps, "PARTIAL": partial})
             + template(events.grid_sample, {"grid_sample": gs, "partial_sample": ps})
             + template(sampling.grid_rows, {"grid_rows": f"grid_rows_{family}", "GRID_SAMPLE": gs,
-                                            "DENSE_OUTPUT": "False"}))
+                                            "DENSE_OUTPUT": "False"}, inline=True))
 
 
 def dense_grid_rows() -> str:
     """``grid_rows_dense``: the time-grid samples of a step by its continuous extension."""
     return template(sampling.grid_rows, {"grid_rows": "grid_rows_dense", "DENSE_OUTPUT": "True",
-                                         "GRID_SAMPLE": "grid_sample_adaptive"})
+                                         "GRID_SAMPLE": "grid_sample_adaptive"}, inline=True)
 
 
 def section_functions(n: int) -> str:
     """What the section drivers call: the crossing test, the writer, Hénon's locator and
     ``section_rows`` (a step's crossing by Hénon's trick)."""
-    return (template(events.crosses) + template(events.section_event)
-            + template(events.henon_crossing) + henon_source(n)
-            + template(sampling.section_rows, {"SECTION_DENSE": "False"}))
+    return (template(events.crosses, inline=True) + template(events.section_event, inline=True)
+            + template(events.henon_crossing, inline=True) + henon_source(n)
+            + template(sampling.section_rows, {"SECTION_DENSE": "False"}, inline=True))
 
 
 def dense_section_rows() -> str:
     """``section_rows_dense``: a step's crossing located on its continuous extension."""
     return (template(events.dense_crossing)
             + template(sampling.section_rows, {"section_rows": "section_rows_dense",
-                                               "SECTION_DENSE": "True"}))
+                                               "SECTION_DENSE": "True"}, inline=True))
 
 
 FLAGS = ("DENSE_OUTPUT", "GRID", "GRIDDED", "SECTION", "SECTION_DENSE", "WITH_STAGES")

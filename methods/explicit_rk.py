@@ -3,7 +3,7 @@
 The generated step unrolls the stages over the tuple state, skipping zero coefficients, so the
 compiled code keeps the state in registers (measured: within ~1.1x of a C loop on kepler-2d).
 Under ``sum=compensated`` it also writes ``step_sum(y, e, h, par, ws)``: the same stages, the
-increment Δ = h Σ b_i k_i formed first (``erk_inc``) and added to y with the carried rounding
+increment Δ = h Σ b_i k_i formed first and added to y with the carried rounding
 error e ([HLW] VIII.5, methods/summation.py). Adding a method: a tableau here and one line in
 :mod:`methods` (``summation="compensated"`` makes that its default).
 """
@@ -18,59 +18,51 @@ RK4 = tableau([[0, 0, 0, 0], ["1/2", 0, 0, 0], [0, "1/2", 0, 0], [0, 0, 1, 0]],
               ["1/6", "1/3", "1/3", "1/6"], [0, "1/2", "1/2", 1], order=4)  # Kutta (1901)
 
 
-def _lincomb(name: str, n: int, k: int) -> str:
-    """name(y, h, c0, v0, ..., c_{k-1}, v_{k-1}) = y + h (c0 v0 + ... ) componentwise."""
-    args = ", ".join(f"c{j}, v{j}" for j in range(k))
-    comps = ", ".join(f"y[{i}] + h * (" + " + ".join(f"c{j} * v{j}[{i}]" for j in range(k)) + ")"
-                      for i in range(n))
-    return (f"\n@njit(cache=True)\ndef {name}(y, h, {args}):\n"
-            f"    return ({comps}{',' if n == 1 else ''})\n")
+def lincomb(y: str, h: str, terms, n: int) -> str:
+    """y + h (c0 v0 + c1 v1 + ...) componentwise over the (coefficient, stage name) ``terms``, as
+    a tuple display written where it is used: the same operations a helper function of the
+    coefficients did, without compiling one helper per number of terms (numba's per-function cost
+    was most of their compile time)."""
+    comps = [f"{y}[{i}] + {h} * (" + " + ".join(f"{lit(c)} * {v}[{i}]" for c, v in terms) + ")"
+             for i in range(n)]
+    return _tuple(comps)
 
 
-def _increment(name: str, n: int, k: int) -> str:
-    """name(h, c0, v0, ..., c_{k-1}, v_{k-1}) = h (c0 v0 + ...) componentwise: the increment of
-    ``_lincomb``, by the same operations."""
-    args = ", ".join(f"c{j}, v{j}" for j in range(k))
-    comps = ", ".join("h * (" + " + ".join(f"c{j} * v{j}[{i}]" for j in range(k)) + ")"
-                      for i in range(n))
-    return (f"\n@njit(cache=True)\ndef {name}(h, {args}):\n"
-            f"    return ({comps}{',' if n == 1 else ''})\n")
+def _increment(h: str, terms, n: int) -> str:
+    """h (c0 v0 + ...) componentwise: the increment of :func:`lincomb`, by the same operations."""
+    return _tuple([f"{h} * (" + " + ".join(f"{lit(c)} * {v}[{i}]" for c, v in terms) + ")"
+                   for i in range(n)])
 
 
-def stage_lines(tab: Tableau, count: int, first: str = "f(y, par)") -> tuple[list[str], set[int]]:
+def _tuple(comps: list[str]) -> str:
+    if len(comps) == 1:
+        return f"({comps[0]},)"
+    return "(\n" + "".join(f"        {c},\n" for c in comps) + "    )"
+
+
+def stage_lines(tab: Tableau, count: int, n: int, first: str = "f(y, par)") -> list[str]:
     """Lines computing stages k0..k{count-1} of ``tab`` (zero coefficients skipped)."""
-    lines, arities = [], set()
+    lines = []
     a = tab.doubles[0]
     for i in range(count):
-        terms = [(a[i][j], j) for j in range(i) if tab.a[i][j] != 0]
+        terms = [(a[i][j], f"k{j}") for j in range(i) if tab.a[i][j] != 0]
         if i == 0:
             lines.append(f"    k0 = {first}")
         elif terms:
-            arities.add(len(terms))
-            args = ", ".join(f"{lit(c)}, k{j}" for c, j in terms)
-            lines.append(f"    k{i} = f(erk_lc{len(terms)}(y, h, {args}), par)")
+            lines.append(f"    k{i} = f({lincomb('y', 'h', terms, n)}, par)")
         else:
             lines.append(f"    k{i} = f(y, par)")
-    return lines, arities
+    return lines
 
 
-def combination(weights, arities: set[int]) -> str:
-    """y + h Σ w_j k_j over the non-zero weights (registers the helper arity)."""
-    terms = [(w, j) for j, w in enumerate(weights) if w != 0]
-    arities.add(len(terms))
-    return f"erk_lc{len(terms)}(y, h, " + ", ".join(f"{lit(c)}, k{j}" for c, j in terms) + ")"
+def combination(weights, n: int) -> str:
+    """y + h Σ w_j k_j over the non-zero weights."""
+    return lincomb("y", "h", [(w, f"k{j}") for j, w in enumerate(weights) if w != 0], n)
 
 
-def increment(weights) -> tuple[str, int]:
-    """h Σ w_j k_j over the non-zero weights (``erk_inc<k>``; add k to the increment arities)."""
-    terms = [(w, j) for j, w in enumerate(weights) if w != 0]
-    return (f"erk_inc{len(terms)}(h, " + ", ".join(f"{lit(c)}, k{j}" for c, j in terms) + ")",
-            len(terms))
-
-
-def helpers(n: int, arities: set[int], increments: set[int] = frozenset()) -> str:
-    return ("".join(_lincomb(f"erk_lc{k}", n, k) for k in sorted(arities))
-            + "".join(_increment(f"erk_inc{k}", n, k) for k in sorted(increments)))
+def increment(weights, n: int) -> str:
+    """h Σ w_j k_j over the non-zero weights."""
+    return _increment("h", [(w, f"k{j}") for j, w in enumerate(weights) if w != 0], n)
 
 
 def generate_erk(tab: Tableau):
@@ -78,19 +70,16 @@ def generate_erk(tab: Tableau):
 
     def generate(ctx) -> str:
         s = max(j for j, b in enumerate(tab.b) if b != 0) + 1   # trailing zero-weight stages unused
-        lines, arities = stage_lines(tab, s)
-        lines = ["\n@njit(cache=True)\ndef step(y, h, par, ws):"] + lines
-        stages = lines[1:]
-        lines.append(f"    return {combination(tab.doubles[1][:s], arities)}, {float(s)!r}, 0.0, STATUS_OK")
-        increments = set()
+        stages = stage_lines(tab, s, ctx.n)
+        lines = (["\n@njit(cache=True)\ndef step(y, h, par, ws):"] + stages
+                 + [f"    return {combination(tab.doubles[1][:s], ctx.n)}, {float(s)!r}, 0.0, "
+                    f"STATUS_OK"])
         if compensated(ctx.values):      # the same stages, the increment added with its carry
-            inc, k = increment(tab.doubles[1][:s])
-            increments.add(k)
             lines += (["\n@njit(cache=True)\ndef step_sum(y, e, h, par, ws):"] + stages
-                      + [f"    y1, e1 = carry_add(y, e, {inc})",
+                      + [f"    y1, e1 = carry_add(y, e, {increment(tab.doubles[1][:s], ctx.n)})",
                          f"    return y1, e1, {float(s)!r}, 0.0, STATUS_OK"])
-        ws = "\n@njit(cache=True)\ndef make_ws():\n    return 0\n"
-        return helpers(ctx.n, arities, increments) + ws + "\n".join(lines) + "\n"
+        ws = "\n@njit(cache=True, inline='always')\ndef make_ws():\n    return 0\n"
+        return ws + "\n".join(lines) + "\n"
 
     return generate
 

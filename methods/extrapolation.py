@@ -57,7 +57,7 @@ def harmonic(kmax: int) -> tuple[int, ...]:
 
 
 KMAX_LIMIT = 16
-#: the controller's small pieces, inlined into the loop by numba (no separate compilation)
+#: the controller's small pieces, written into the loop (suite/foundation/inline.py)
 INLINE = {"adaptive_ws", "controller_init", "controller_state", "controller_clip",
           "controller_prepare", "attempt", "attempt_outcome", "controller_accept",
           "controller_reject"}
@@ -79,18 +79,20 @@ def _generate(data: Extrapolation):
         comma = "," if ctx.n == 1 else ""
         shift = ", ".join(f"y[{i}] + h * v[{i}]" for i in range(ctx.n))
         scale = ", ".join(f"a * v[{i}]" for i in range(ctx.n))
-        src = (consts + f"\n@njit(cache=True)\ndef to_tuple_shift(y, h, v):\n"
+        src = (consts + f"\n@njit(cache=True, inline='always')\ndef to_tuple_shift(y, h, v):\n"
                f"    return ({shift}{comma})\n"
-               f"\n@njit(cache=True)\ndef scaled(a, v):\n    return ({scale}{comma})\n"
-               + template(extrapolation.gragg_column) + template(extrapolation.neville)
+               f"\n@njit(cache=True, inline='always')\ndef scaled(a, v):\n"
+               f"    return ({scale}{comma})\n"
+               + template(extrapolation.gragg_column, inline=True)
+               + template(extrapolation.neville, inline=True)
                + "".join(template(getattr(extrapolation, name), inline=name == "solution")
                          for name in ("make_ws", "fixed_increment", "step", "step_sum",
                                       "solution")))
         if kmax:
             loop = adaptive.integrate_adaptive
             src += ("\nFSAL = False\n"
-                    + template(adaptive.initial_step, {"IORD": "HINIT_ORDER"})
-                    + template(adaptive.first_step)
+                    + template(adaptive.initial_step, {"IORD": "HINIT_ORDER"}, inline=True)
+                    + template(adaptive.first_step, inline=True)
                     + "".join(template(getattr(extrapolation, name), inline=name in INLINE)
                               for name in ("column", "adaptive_ws", "controller_init",
                                            "controller_state", "controller_clip",

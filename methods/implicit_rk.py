@@ -59,11 +59,12 @@ def generate_irk(tab: Tableau):
         k = int(ctx.values.get("fixed_point", 0))
         if k:                                   # fixed-point iteration instead of Newton
             consts.append(f"FIXED_POINT = {k}")
-            solver = template(irk.stages_fixed_point, {"stages_fixed_point": "stages"})
+            solver = template(irk.stages_fixed_point, {"stages_fixed_point": "stages"},
+                              inline=True)
         else:
-            solver = template(irk.stages)
-        return ("\n" + "\n".join(consts) + "\n" + template(irk.make_ws) + solver
-                + template(irk.step) + template(irk.step_sum))
+            solver = template(irk.stages, inline=True)
+        return ("\n" + "\n".join(consts) + "\n" + template(irk.make_ws, inline=True) + solver
+                + template(irk.step, inline=True) + template(irk.step_sum, inline=True))
 
     return generate
 

@@ -55,17 +55,17 @@ def carry_source(n: int) -> str:
     ``carry_apply(y, e)``: y + e rounded (a point that starts from the carried state);
     ``carry_zero(y)``: a zero carry of y's shape."""
     comma = "," if n == 1 else ""
-    lines = ["\n@njit(cache=True)\ndef carry_sum(a, e, d):",
+    lines = ["\n@njit(cache=True, inline='always')\ndef carry_sum(a, e, d):",
              "    # [HLW] VIII.5 Alg. 5.1 with Knuth's TwoSum: s + err == a + (e + d) exactly",
              "    x = e + d", "    s = a + x", "    b = s - a",
              "    return s, (a - (s - b)) + (x - b)",
-             "\n@njit(cache=True)\ndef carry_add(y, e, d):"]
+             "\n@njit(cache=True, inline='always')\ndef carry_add(y, e, d):"]
     for i in range(n):
         lines.append(f"    s{i}, c{i} = carry_sum(y[{i}], e[{i}], d[{i}])")
     lines.append(f"    return ({', '.join(f's{i}' for i in range(n))}{comma}), "
                  f"({', '.join(f'c{i}' for i in range(n))}{comma})")
-    lines += ["\n@njit(cache=True)\ndef carry_apply(y, e):",
+    lines += ["\n@njit(cache=True, inline='always')\ndef carry_apply(y, e):",
               f"    return ({', '.join(f'y[{i}] + e[{i}]' for i in range(n))}{comma})",
-              "\n@njit(cache=True)\ndef carry_zero(y):",
+              "\n@njit(cache=True, inline='always')\ndef carry_zero(y):",
               f"    return ({', '.join('0.0' for _ in range(n))}{comma})"]
     return "\n".join(lines) + "\n"

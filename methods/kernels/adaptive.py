@@ -143,9 +143,12 @@ def initial_step(y, fy, par, hmax, rtol, atol):
 def first_step(y, fy, par, h0, hmax, rtol, atol):
     """The first step (h0 if given, capped by hmax, else HINIT) and the f-evaluations so far:
     f(y0), plus HINIT's probe."""
-    if h0 > 0.0:
-        return min(h0, hmax), 1.0
-    return initial_step(y, fy, par, hmax, rtol, atol), 2.0
+    h = min(h0, hmax)
+    nfev = 1.0
+    if not h0 > 0.0:          # (one return: written inline, suite/foundation/inline.py)
+        h = initial_step(y, fy, par, hmax, rtol, atol)
+        nfev = 2.0
+    return h, nfev
 
 
 def integrate_adaptive(y_io, st, par, t_end, h0, hmax, rtol, atol, every, dt_out, n_out, max_steps,

@@ -67,12 +67,13 @@ def crosses(g0, g1):
 def section_event(ys, ts, par, st, out_t, out_y, out_c, row, steps, nfev, njev, rejected):
     """Write the located crossing (ts, ys) with the counters of its step when the direction
     condition holds there; return the number of rows written (0 or 1)."""
-    if not section_cond_0(ys, par) > 0.0:
-        return 0
-    record_row(out_t, out_y, out_c, row, ts, ys, steps, nfev, njev, rejected)
-    st[ST_FOUND] += 1.0
-    st[ST_MAX_G] = max(st[ST_MAX_G], abs(section_g_0(ys, par)))
-    return 1
+    wrote = 0
+    if section_cond_0(ys, par) > 0.0:
+        record_row(out_t, out_y, out_c, row, ts, ys, steps, nfev, njev, rejected)
+        st[ST_FOUND] += 1.0
+        st[ST_MAX_G] = max(st[ST_MAX_G], abs(section_g_0(ys, par)))
+        wrote = 1
+    return wrote          # (one return: written inline, suite/foundation/inline.py)
 
 
 def henon_crossing(y, t, t_next, par, st):

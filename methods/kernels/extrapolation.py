@@ -61,6 +61,7 @@ def gragg_column(y, fy, h, nj, par, T, row, check, rtol, atol):
     hj = h / nj
     z_prev = scaled(0.0, fy)
     z_mid = scaled(hj, fy)                             # explicit Euler start
+    nfev = nj                  # (one return: written inline, suite/foundation/inline.py)
     for m in range(1, nj):
         dy = f(to_tuple_shift(y, 1.0, z_mid), par)
         z_next = to_tuple_shift(z_prev, 2.0 * hj, dy)
@@ -74,11 +75,13 @@ def gragg_column(y, fy, h, nj, par, T, row, check, rtol, atol):
                 del1 += (fy[i] / sk) ** 2
                 del2 += ((dy[i] - fy[i]) / sk) ** 2
             if del2 / max(UROUND, del1) > 4.0:
-                return -m
-    dy = f(to_tuple_shift(y, 1.0, z_mid), par)        # smoothing step
-    for i in range(N):
-        T[row, i] = 0.5 * (z_prev[i] + z_mid[i] + hj * dy[i])
-    return nj
+                nfev = -m
+                break
+    if nfev == nj:
+        dy = f(to_tuple_shift(y, 1.0, z_mid), par)    # smoothing step
+        for i in range(N):
+            T[row, i] = 0.5 * (z_prev[i] + z_mid[i] + hj * dy[i])
+    return nfev
 
 
 def neville(T, j):
@@ -121,8 +124,10 @@ def step_sum(y, e, h, par, ws):
 def solution(y, e, T):
     """y + T_kk (the increment in T[0]) with its carry: (y1, e1)."""
     if COMPENSATED:
-        return carry_add(y, e, to_tuple(T[0]))
-    return to_tuple_shift(y, 1.0, to_tuple(T[0])), e
+        y1, e1 = carry_add(y, e, to_tuple(T[0]))
+    else:
+        y1, e1 = to_tuple_shift(y, 1.0, to_tuple(T[0])), e
+    return y1, e1         # (one return: written inline, suite/foundation/inline.py)
 
 
 def partial_adaptive(y, e, fy, sigma, par, ws, kc):
@@ -270,24 +275,27 @@ def attempt(y, e, fy, h, par, ws, rtol, atol):
                 go = 60
     info[5] = kc
     info[6] = nfev
+    y1, e1 = y, e
     if go == 60:
         info[7] = ACCEPT
         y1, e1 = solution(y, e, T)
-        return y1, e1, err, fy
-    info[7] = UNSTABLE if go == 10 else REJECT
-    return y, e, err, fy
+    else:
+        info[7] = UNSTABLE if go == 10 else REJECT
+    return y1, e1, err, fy
 
 
 def controller_reject(h, k, err, verdict, kc, ws, nacc):
     """After a rejection: h * SAFE3 on instability, else line min(k, kc) (one lower when it is
     cheaper per unit step) and its optimal step: (h_new, k, counted)."""
     if verdict == UNSTABLE:
-        return h * SAFE3, k, True
-    hh, w = ws[1], ws[2]
-    k = min(k, kc, KMAX - 1)
-    if k > 2 and w[k - 2] < w[k - 1] * FAC3:
-        k -= 1
-    return hh[k - 1], k, True
+        h_new = h * SAFE3
+    else:
+        hh, w = ws[1], ws[2]
+        k = min(k, kc, KMAX - 1)
+        if k > 2 and w[k - 2] < w[k - 1] * FAC3:
+            k -= 1
+        h_new = hh[k - 1]
+    return h_new, k, True
 
 
 def controller_accept(h, k, err, reject, kc, ws, hmax):
@@ -311,11 +319,13 @@ def controller_accept(h, k, err, reject, kc, ws, hmax):
             kopt = min(kc, KMAX - 1)
     if reject:                                 # after a rejection: never a larger step
         k = min(kopt, kc)
-        return min(h, hh[k - 1]), k
-    if kopt <= kc:
-        h = hh[kopt - 1]
-    elif kc < k and w[kc - 1] < w[kc - 2] * FAC4:
-        h = hh[kc - 1] * WORK_A[kopt] / WORK_A[kc - 1]
+        h = min(h, hh[k - 1])
     else:
-        h = hh[kc - 1] * WORK_A[kopt - 1] / WORK_A[kc - 1]
-    return h, kopt
+        if kopt <= kc:
+            h = hh[kopt - 1]
+        elif kc < k and w[kc - 1] < w[kc - 2] * FAC4:
+            h = hh[kc - 1] * WORK_A[kopt] / WORK_A[kc - 1]
+        else:
+            h = hh[kc - 1] * WORK_A[kopt - 1] / WORK_A[kc - 1]
+        k = kopt
+    return h, k

@@ -51,9 +51,11 @@ def stages(y, h, par, ws):
     nfev = 0.0
     njev = 0.0
     prev = np.inf
+    status = STATUS_OK         # (one return: written inline, suite/foundation/inline.py)
     for it in range(NEWTON_MAXIT + 1):
         if it == NEWTON_MAXIT:
-            return nfev, njev, STATUS_NEWTON_FAILED
+            status = STATUS_NEWTON_FAILED
+            break
         for j in range(S):
             Yj = shifted(y, Z, j)
             store(f(Yj, par), F, j)
@@ -75,31 +77,34 @@ def stages(y, h, par, ws):
                     acc += A[a][j] * F[j, i]
                 r[a * N + i] = h * acc - Z[a, i]
         if not lu_solve(M, r, S * N, piv):
-            return nfev, njev, STATUS_NEWTON_FAILED
+            status = STATUS_NEWTON_FAILED
+            break
         dnorm = 0.0
         for a in range(S):
             for i in range(N):
                 Z[a, i] += r[a * N + i]
                 dnorm = max(dnorm, abs(r[a * N + i]))
         if not dnorm < np.inf:
-            return nfev, njev, STATUS_NEWTON_FAILED
+            status = STATUS_NEWTON_FAILED
+            break
         if newton_done(dnorm, prev, scale):
             break
         prev = dnorm
-    return nfev, njev, STATUS_OK
+    return nfev, njev, status
 
 
 def step(y, h, par, ws):
     nfev, njev, s = stages(y, h, par, ws)
-    if s != STATUS_OK:
-        return y, nfev, njev, s
-    Z, out = ws[0], ws[6]
-    for i in range(N):
-        acc = 0.0
-        for j in range(S):
-            acc += D[j] * Z[j, i]
-        out[i] = y[i] + acc
-    return to_tuple(out), nfev, njev, STATUS_OK
+    y1 = y                     # (one return: written inline, suite/foundation/inline.py)
+    if s == STATUS_OK:
+        Z, out = ws[0], ws[6]
+        for i in range(N):
+            acc = 0.0
+            for j in range(S):
+                acc += D[j] * Z[j, i]
+            out[i] = y[i] + acc
+        y1 = to_tuple(out)
+    return y1, nfev, njev, s
 
 
 def stages_fixed_point(y, h, par, ws):
@@ -112,6 +117,7 @@ def stages_fixed_point(y, h, par, ws):
         for j in range(S):
             Z[j, i] = 0.0
     nfev = 0.0
+    njev = 1.0
     prev = np.inf
     for it in range(FIXED_POINT):
         for j in range(S):
@@ -129,20 +135,21 @@ def stages_fixed_point(y, h, par, ws):
         if not dnorm < np.inf:
             break
         if newton_done(dnorm, prev, scale):
-            return nfev, 0.0, STATUS_OK
+            njev = 0.0
+            break
         prev = dnorm
-    return nfev, 1.0, STATUS_OK
+    return nfev, njev, STATUS_OK
 
 
 def step_sum(y, e, h, par, ws):
     nfev, njev, s = stages(y, h, par, ws)
-    if s != STATUS_OK:
-        return y, e, nfev, njev, s
-    Z, out = ws[0], ws[6]
-    for i in range(N):
-        acc = 0.0
-        for j in range(S):
-            acc += D[j] * Z[j, i]
-        out[i] = acc
-    y1, e1 = carry_add(y, e, to_tuple(out))
-    return y1, e1, nfev, njev, STATUS_OK
+    y1, e1 = y, e
+    if s == STATUS_OK:
+        Z, out = ws[0], ws[6]
+        for i in range(N):
+            acc = 0.0
+            for j in range(S):
+                acc += D[j] * Z[j, i]
+            out[i] = acc
+        y1, e1 = carry_add(y, e, to_tuple(out))
+    return y1, e1, nfev, njev, s

@@ -5,8 +5,10 @@ from __future__ import annotations
 def lu_solve(M, r, n, piv):
     """Solve M x = r in place (x returned in r) by Gaussian elimination with partial pivoting.
 
-    Returns False if M is singular to working precision. M is overwritten.
+    Returns False if M is singular to working precision. M is overwritten. (One return: written
+    inline, suite/foundation/inline.py.)
     """
+    ok = True
     for k in range(n):
         p = k
         big = abs(M[k, k])
@@ -15,7 +17,8 @@ def lu_solve(M, r, n, piv):
                 big = abs(M[i, k])
                 p = i
         if big == 0.0:
-            return False
+            ok = False
+            break
         piv[k] = p
         if p != k:
             for j in range(n):
@@ -32,9 +35,10 @@ def lu_solve(M, r, n, piv):
                 for j in range(k + 1, n):
                     M[i, j] -= m * M[k, j]
                 r[i] -= m * r[k]
-    for k in range(n - 1, -1, -1):
-        s = r[k]
-        for j in range(k + 1, n):
-            s -= M[k, j] * r[j]
-        r[k] = s / M[k, k]
-    return True
+    if ok:
+        for k in range(n - 1, -1, -1):
+            s = r[k]
+            for j in range(k + 1, n):
+                s -= M[k, j] * r[j]
+            r[k] = s / M[k, k]
+    return ok

@@ -9,6 +9,7 @@ def newton_done(dnorm, prev, scale):
     can only be round-off (<= 1e-10 scale): Newton converges quadratically, so a non-decreasing
     increment after that point is the floating-point floor, not a stall.
     """
+    done = dnorm >= prev and dnorm <= 1e-10 * scale
     if dnorm <= 8.881784197001252e-16 * scale:
-        return True
-    return dnorm >= prev and dnorm <= 1e-10 * scale
+        done = True
+    return done        # (one return: written inline, suite/foundation/inline.py)

@@ -61,10 +61,11 @@ class ProblemKernel:
         return out
 
     def at(self, y) -> tuple[float, ...]:
-        """I_k at one state."""
+        """I_k at one state (by ``eval_invariants``, the function that evaluates them at the
+        samples: ``invariants`` called from Python would be one more function to compile)."""
         if not self.integral_names:
             return ()
-        return tuple(float(v) for v in self.kernel.invariants(tuple(float(x) for x in y), self.par))
+        return tuple(float(v) for v in self.integrals(np.array([y], dtype=np.float64))[0])
 
 
 def problem_kernel(problem: Bound) -> ProblemKernel:

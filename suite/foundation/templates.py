@@ -34,9 +34,12 @@ class Context:
 def template(func, rename: dict[str, str] | None = None, inline: bool = False) -> str:
     """Source of a template function, decorated for numba, with identifiers renamed.
 
-    ``inline``: numba inlines the function into its callers at the IR level (``inline='always'``)
-    instead of compiling it on its own: for the small pieces of a driver loop (a controller's
-    update), whose separate compilation would cost more than their code."""
+    ``inline``: marked ``inline='always'``, the function is written into its callers' source when
+    the module is cached (:mod:`gnibench.suite.foundation.inline`; numba's own IR inlining is
+    the fallback where it cannot be) instead of being compiled on its own: for the small pieces
+    of a driver loop (a controller's update, a sample's row, Newton's parts), whose separate
+    compilation would cost more than their code. It must then have one ``return``, its last
+    statement."""
     src = _source(func)
     for old, new in (rename or {}).items():
         src = re.sub(rf"\b{re.escape(old)}\b", new, src)
@@ -50,21 +53,24 @@ def _source(func) -> str:
 
 
 def tuple_helpers(n: int) -> str:
-    """to_tuple, shifted, store: conversions between the tuple state and arrays."""
+    """to_tuple, shifted, store: conversions between the tuple state and arrays, unrolled over the
+    N components and marked for inlining (:mod:`gnibench.suite.foundation.inline`): written at
+    their call sites, they are not compiled on their own (``store`` was compiled once per row
+    argument type, 4 times in a dopri5 cell)."""
     items = ", ".join(f"a[{i}]" for i in range(n))
     shifted = ", ".join(f"y[{i}] + Z[j, {i}]" for i in range(n))
     comma = "," if n == 1 else ""
+    stores = "\n".join(f"    A[j, {i}] = t[{i}]" for i in range(n))
     return f'''
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def to_tuple(a):
     return ({items}{comma})
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def shifted(y, Z, j):
     return ({shifted}{comma})
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def store(t, A, j):
-    for i in range(len(t)):
-        A[j, i] = t[i]
+{stores}
 '''

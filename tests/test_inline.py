@@ -1,0 +1,145 @@
+"""Source-level inlining of the generated modules (suite/foundation/inline.py): the small helpers
+are written into their callers with the same operations, so a module computes the same bits
+before and after, and numba compiles fewer functions.
+
+The modules are run here as plain Python (the ``@njit`` lines removed): Python evaluates the
+same floating-point operations as the compiled code, so equal results before and after
+inlining show that no operation was changed, reordered or dropped. No numba compilation."""
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+import pytest
+from gnibench.methods.kernels.slots import STATE, Y_ROWS
+from gnibench.suite.cell.codegen import _inline, module_source
+from gnibench.suite.cell.spec import prepare
+from gnibench.suite.foundation.inline import BIG_TUPLE, inline_source
+
+
+def _python(text: str) -> dict:
+    """The functions of a generated module as plain Python."""
+    namespace: dict = {}
+    exec(compile(re.sub(r"^@njit\(.*\)\n", "", text, flags=re.M), "<module>", "exec"), namespace)
+    return namespace
+
+
+def _run(text: str, problem, method, name: str, args: tuple, rows: int = 40):
+    """The driver ``name`` of a module run from the cell's y0 (y_io, st and the output rows)."""
+    ns = _python(text)
+    rec = problem.record
+    y_io = np.zeros((Y_ROWS, rec.dim))
+    y_io[0] = rec.y0(problem.values)
+    st = np.zeros(STATE)
+    st[14] = 3.0                                         # ST_WANTED: crossings of a section run
+    par = np.array(rec.par(problem.values), dtype=np.float64)
+    out_t, out_y, out_c = np.zeros(rows), np.zeros((rows, rec.dim)), np.zeros((rows, 4))
+    status, row = ns[name](y_io, st, par, *args, 10**6, out_t, out_y, out_c)
+    return status, row, y_io, st, out_t, out_y, out_c
+
+
+ADAPTIVE = (2.0, 0.0, 2.0, 1e-6, 1e-6, 1, 0.0, 0, 10**6)       # t_end, h0, hmax, rtol, atol, ...
+CELLS = [
+    ("kepler-2d", "rk4:h=0.1", "integrate", (0.1, 20, 0.1, 1, 0.0, 0)),
+    ("kepler-2d", "rk4:h=0.1,sum=compensated", "integrate", (0.1, 20, 0.1, 1, 0.0, 0)),
+    ("kepler-2d", "gauss4:h=0.1", "integrate", (0.1, 20, 0.1, 1, 0.0, 0)),
+    ("kepler-2d", "stormer-verlet:h=0.1", "integrate_grid", (0.1, 20, 0.1, 1, 0.07, 30)),
+    ("kepler-2d", "dopri5", "integrate_adaptive", ADAPTIVE),
+    ("kepler-2d", "dop853", "integrate_dense", ADAPTIVE[:6] + (0.05, 41, 10**6)),
+    ("kepler-2d", "odex", "integrate_adaptive", ADAPTIVE),
+    ("kepler-2d", "vern6", "integrate_adaptive", ADAPTIVE),
+    ("henon-heiles", "dop853", "adaptive_section_dense", (30.0,) + ADAPTIVE[1:]),
+    ("henon-heiles", "rk4:h=0.05", "integrate_section", (0.05, 600, 0.05, 1, 0.0, 0)),
+]
+
+
+@pytest.mark.parametrize("spec, method, name, args", CELLS)
+def test_inlined_module_computes_the_same_bits(spec, method, name, args):
+    problem, cfg = prepare(spec, method)
+    text, _ = module_source(problem, cfg)
+    inlined = _inline(text, "cell")
+    assert inlined != text
+    before = _run(text, problem, cfg, name, args)
+    after = _run(inlined, problem, cfg, name, args)
+    assert before[1] > 1                                 # rows were written
+    for a, b in zip(before, after):
+        assert np.array_equal(a, b, equal_nan=True), name
+
+
+@pytest.mark.parametrize("spec, method", [("kepler-2d", "dopri5"), ("kepler-2d", "gauss4"),
+                                          ("kepler-2d", "odex"), ("henon-heiles", "dop853"),
+                                          ("henon-heiles", "rk4+observer"),
+                                          ("kepler-2d", "rk4+projection:on=H/L"),
+                                          ("kepler-2d", "implicit-midpoint:fixed_point=5")])
+def test_every_marked_helper_is_written_inline(spec, method):
+    """A helper marked ``inline='always'`` that the inliner cannot take (a second ``return``, a
+    loop exit) would silently be compiled on its own again, as numba inlines it: none is left."""
+    problem, cfg = prepare(spec, method)
+    text = _inline(module_source(problem, cfg)[0], "cell")
+    code = re.sub(r'""".*?"""', "", text, flags=re.S)
+    marked = re.findall(r"^@njit\(cache=True, inline='always'\)\ndef (\w+)\(", text, re.M)
+    assert marked
+    called = [name for name in marked if re.search(rf"(?<!def )(?<![\w.]){name}\(", code)]
+    assert called == []
+
+
+SOURCE = '''
+def helper(a, b):
+    t = a * b
+    return t + a
+
+def proc(t, A, j):
+    A[j, 0] = t[0]
+    A[j, 1] = t[1]
+
+def early(x):
+    if x > 0.0:
+        return 1.0
+    return 2.0
+
+def pure(a):
+    return (a[0] + 1.0, a[1] * 2.0)
+
+def big(a):
+    return (BIG)
+
+def caller(x, y, A):
+    u = helper(x + y, y) * helper(x, 3.0)
+    proc(pure((x, y)), A, 0)
+    v = pure((u, x)) if x > 0.0 else pure((x, u))
+    w = early(x)
+    k = 0
+    while helper(k, 1.0) < 3.0:
+        k += 1
+    t = 0.5
+    z = helper(x, t)
+    b = big(x)
+    return u, v, w, k, z, b[0]
+'''.replace("BIG", ", ".join(f"{i}.0 * a" for i in range(BIG_TUPLE + 2)))
+
+
+def test_inliner_keeps_python_semantics_and_leaves_what_it_cannot_take():
+    names = ("helper", "proc", "early", "pure", "big")
+    out = inline_source(SOURCE, names)
+    caller = out[out.index("def caller("):]
+    assert "helper(x" not in caller and "proc(" not in caller     # written inline
+    assert "early(x)" in caller                                    # two returns: stays a call
+    assert "while helper(k, 1.0) < 3.0" in caller                  # needs a statement: a call
+    assert "pure((u, x)) if" in caller                             # conditional branch: a call
+    assert re.search(r"tuple__\d+ = \(0\.0 \* x", caller)          # a big tuple gets a local
+    for x, y in ((1.5, -0.25), (-2.0, 3.0), (1e300, 1e300)):
+        A1, A2 = np.zeros((1, 2)), np.zeros((1, 2))
+        r1 = _python(SOURCE)["caller"](x, y, A1)
+        r2 = _python(out)["caller"](x, y, A2)
+        assert repr(r1) == repr(r2) and np.array_equal(A1, A2)
+
+
+def test_a_global_shadowed_by_a_local_of_the_caller_is_not_inlined():
+    src = ("def g(a):\n    return a * SCALE\n\n"
+           "def h(x):\n    SCALE = 2.0\n    return g(x) + SCALE\n")
+    out = inline_source(src, ("g",))
+    assert out == src
+    ns = {"SCALE": 3.0}
+    exec(out, ns)
+    assert ns["h"](1.0) == 5.0 and math.isfinite(ns["h"](2.0))
