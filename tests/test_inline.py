@@ -143,3 +143,56 @@ def test_a_global_shadowed_by_a_local_of_the_caller_is_not_inlined():
     ns = {"SCALE": 3.0}
     exec(out, ns)
     assert ns["h"](1.0) == 5.0 and math.isfinite(ns["h"](2.0))
+
+
+def _frontend_failures(text: str) -> list[str]:
+    """The functions of an inlined module holding a tuple display of more than BIG_TUPLE
+    elements that numba's front end (bytecode -> IR) refuses (the others cannot meet this)."""
+    import ast
+    import importlib.util
+    import tempfile
+
+    from numba.core.compiler import run_frontend
+
+    with tempfile.NamedTemporaryFile("w", suffix=".py", delete=False) as fh:
+        fh.write(text)
+    spec = importlib.util.spec_from_file_location("gnibench_inline_probe", fh.name)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    wide = {fn.name for fn in ast.parse(text).body if isinstance(fn, ast.FunctionDef)
+            and any(isinstance(t, ast.Tuple) and len(t.elts) > BIG_TUPLE for t in ast.walk(fn))}
+    assert wide, "no function holds a wide tuple: the probe would test nothing"
+    bad = []
+    for name, obj in vars(module).items():
+        if name in wide and getattr(obj, "py_func", None) is not None:
+            try:
+                run_frontend(obj.py_func)
+            except Exception as e:                                       # noqa: BLE001
+                bad.append(f"{name}: {type(e).__name__} {e}")
+    return bad
+
+
+def _wide_cells():
+    from gnibench.methods import COMPILED
+
+    for mid, m in COMPILED.items():
+        if mid in ("lie-poisson", "generating-function4"):    # so(4) only; sympy per problem
+            continue
+        if mid in ("vern7", "vern8", "vern9", "feagin10"):  # vern6's and dop853's generator and
+            continue                                         # dense-output forms, more stages
+        names = {p.name for p in m.params if p.only_if is None}
+        opts = ["h=10"] if "h" in names else []
+        # compensated: the module holds the plain step too (the drivers branch on COMPENSATED)
+        opts += ["sum=compensated"] if "sum" in names else []
+        yield f"{mid}:{','.join(opts)}".rstrip(":")
+
+
+@pytest.mark.parametrize("method", list(_wide_cells()))
+def test_wide_states_pass_numba_front_end_after_inlining(method):
+    """36 states (outer solar system) > BIG_TUPLE: the wide functions of every compiled method's
+    inlined module go through numba's front end (an inlined pair of
+    36-tuples returned into names a branch also assigns failed in it: implicit-euler, sum=
+    compensated, [HLW] Fig 2.4)."""
+    problem, cfg = prepare("outer-solar-system", method)
+    text, _ = module_source(problem, cfg)
+    assert _frontend_failures(_inline(text, "cell")) == []

@@ -39,7 +39,9 @@ from typing import NamedTuple
 #: A tuple display of more elements is built by CPython as a list (LIST_TO_TUPLE), and numba's
 #: front end then requires the variable it is assigned to to have a single assignment (an
 #: inlined ``to_tuple`` assigned to a driver's ``y`` failed on the 36 components of the outer
-#: solar system): such a returned tuple is first assigned to a fresh local.
+#: solar system; so did ``y1, e1 = (s0, ..., s35), (c0, ..., c35)``, a compensated implicit
+#: step's pair returned into names a branch also assigns): such a returned tuple, or one held by
+#: a returned tuple display, is first assigned to a fresh local.
 BIG_TUPLE = 30
 
 
@@ -321,17 +323,28 @@ class _Inliner:
                 body, value = self.inline_call(node, scope, local, allow)
             except _NotHere:
                 return node
-            big = isinstance(value, ast.Tuple) and len(value.elts) > BIG_TUPLE
+            big = _big_tuple(value)
             if (body or local or big) and not allow:
                 return node
             hoist.extend(local + body)
-            if big:      # a fresh local holds it (see BIG_TUPLE)
-                name = f"tuple__{next(self.counter)}"
-                hoist.append(ast.Assign(targets=[ast.Name(name, ast.Store())], value=value,
-                                        lineno=0))
-                value = ast.Name(name, ast.Load())
+            if big:      # fresh locals hold the large displays (see BIG_TUPLE)
+                value = self._hold_big(value, hoist)
             return value
         return node
+
+    def _hold_big(self, value, hoist: list):
+        """``value`` with each tuple display of more than BIG_TUPLE elements that it is, or that
+        a tuple display of it holds (``(s0, ..., s35), (c0, ..., c35)`` returned as a pair),
+        assigned first to a fresh local (in evaluation order)."""
+        if not isinstance(value, ast.Tuple):
+            return value
+        if len(value.elts) > BIG_TUPLE:
+            name = f"tuple__{next(self.counter)}"
+            hoist.append(ast.Assign(targets=[ast.Name(name, ast.Store())], value=value,
+                                    lineno=0))
+            return ast.Name(name, ast.Load())
+        elts = [self._hold_big(v, hoist) for v in value.elts]
+        return self._rebuild(value, elts=elts)
 
     @staticmethod
     def _rebuild(node, **fields):
@@ -370,6 +383,12 @@ class _Inliner:
         stmts = [_copy(s, rename, subst) for s in (body[:-1] if ret is not None else body)]
         value = _copy(ret, rename, subst) if ret is not None else None
         return stmts, value
+
+
+def _big_tuple(value) -> bool:
+    """Is ``value`` a tuple display of more than BIG_TUPLE elements, or one that holds one?"""
+    return isinstance(value, ast.Tuple) and (len(value.elts) > BIG_TUPLE
+                                             or any(_big_tuple(v) for v in value.elts))
 
 
 def _returns_value(fn: ast.FunctionDef) -> bool:
