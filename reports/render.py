@@ -161,13 +161,20 @@ def _log_formatter(**kw):
 
 
 def _ticks(ax) -> None:
-    from matplotlib.ticker import LogLocator, NullLocator
+    import math
+
+    from matplotlib.ticker import LogLocator, MaxNLocator, NullLocator
 
     for axis, lim in ((ax.xaxis, ax.get_xlim()), (ax.yaxis, ax.get_ylim())):
         if axis.get_scale() == "log":
             axis.set_minor_locator(NullLocator())
-            if lim[0] > 0 and lim[1] / lim[0] < 30:       # under 1.5 decades: label 1, 2, 5
-                axis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+            lo, hi = min(lim), max(lim)
+            if lo > 0 and hi / lo < 30:       # under 1.5 decades: label 1, 2, 5
+                k = range(math.floor(math.log10(lo)), math.ceil(math.log10(hi)) + 1)
+                if sum(lo <= m * 10.0**e <= hi for e in k for m in (1, 2, 5)) >= 2:
+                    axis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+                else:     # LogLocator would fall back to about 8 linear ticks whose labels collide
+                    axis.set_major_locator(MaxNLocator(nbins=3, steps=[1, 2, 2.5, 5, 10]))
                 axis.set_major_formatter(_log_formatter(minor_thresholds=(2, 2)))
             else:
                 axis.set_major_formatter(_log_formatter())

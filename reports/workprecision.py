@@ -80,7 +80,7 @@ def wp_figures(problem: str, cells, wall_by_cell: dict[int, float], out_dir: Pat
     name = problem if len(problem) <= 60 else problem[:57] + "…"
     labelled = any(s.style.get("label") for p in panels for s in p.series)
     size = (12.4, 3.9 * len(rows) + 0.6)
-    adjust = layout(size, len(rows), right=0.78 if labelled else 0.98)
+    adjust = layout(size, len(rows), right=0.74 if labelled else 0.98)   # room for 40-character labels
     adjust["top"] = 1 - 0.75 / size[1]
     plot = Plot(size, len(rows), 2, panels, adjust, suptitle=f"{name}: work-precision",
                 suptitle_style={"fontsize": 11, "x": 0.42, "y": 0.995},
