@@ -114,13 +114,12 @@ def number(x):
 # -- trees ------------------------------------------------------------------------------------------
 
 
-@cache
-def trees(order: int) -> tuple[tuple[tuple, ...], ...]:
-    """trees(p)[k-1]: the rooted trees with k nodes, k = 1..p. A tree is the tuple of its root's
-    subtrees in non-decreasing (size, index) order, so each tree has one representation."""
-    if not 1 <= order <= MAX_ORDER:
-        raise ValueError(f"order {order}: trees are generated up to order {MAX_ORDER}")
-    by_size: dict[int, list[tuple]] = {1: [()]}
+def grow(order: int, colours: tuple, node) -> tuple[tuple[tuple, ...], ...]:
+    """The rooted trees with k = 1..order nodes, one tuple per k, each tree made by
+    ``node(colour, children)`` for every colour (the children in non-decreasing (size, index)
+    order, so each tree has one representation). Shared by :func:`trees` and the bicoloured
+    trees of :mod:`.prk_conditions`."""
+    by_size: dict[int, list] = {1: [node(colour, ()) for colour in colours]}
 
     def forests(m, lowest):
         if m == 0:
@@ -133,8 +132,17 @@ def trees(order: int) -> tuple[tuple[tuple, ...], ...]:
                         yield (tree,) + rest
 
     for n in range(2, order + 1):
-        by_size[n] = list(forests(n - 1, (0, 0)))
+        by_size[n] = [node(colour, kids) for colour in colours for kids in forests(n - 1, (0, 0))]
     return tuple(tuple(by_size[k]) for k in range(1, order + 1))
+
+
+@cache
+def trees(order: int) -> tuple[tuple[tuple, ...], ...]:
+    """trees(p)[k-1]: the rooted trees with k nodes, k = 1..p. A tree is the tuple of its root's
+    subtrees in non-decreasing (size, index) order, so each tree has one representation."""
+    if not 1 <= order <= MAX_ORDER:
+        raise ValueError(f"order {order}: trees are generated up to order {MAX_ORDER}")
+    return grow(order, (None,), lambda colour, kids: kids)
 
 
 @cache

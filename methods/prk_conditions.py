@@ -21,6 +21,8 @@ from functools import cache
 
 import numpy as np
 
+from gnibench.methods.order_conditions import grow
+
 MAX_ORDER = 10
 COLOURS = ("u", "v")
 
@@ -31,21 +33,7 @@ def trees(order: int) -> tuple[tuple[tuple, ...], ...]:
     with the children in a fixed order (by size, then index), so each tree has one form."""
     if not 1 <= order <= MAX_ORDER:
         raise ValueError(f"order {order}: bicoloured trees are generated up to {MAX_ORDER}")
-    by_size: dict[int, list[tuple]] = {1: [(0, ()), (1, ())]}
-
-    def forests(m, lowest):
-        if m == 0:
-            yield ()
-            return
-        for size in range(1, m + 1):
-            for index, tree in enumerate(by_size[size]):
-                if (size, index) >= lowest:
-                    for rest in forests(m - size, (size, index)):
-                        yield (tree,) + rest
-
-    for n in range(2, order + 1):
-        by_size[n] = [(colour, kids) for colour in (0, 1) for kids in forests(n - 1, (0, 0))]
-    return tuple(tuple(by_size[k]) for k in range(1, order + 1))
+    return grow(order, (0, 1), lambda colour, kids: (colour, kids))
 
 
 @cache

@@ -74,8 +74,21 @@ def require(found: list[str], what: str) -> None:
         raise ValueError(f"{what}: " + "; ".join(found[:3]) + more)
 
 
+class TableauShape:
+    """The shape of a tableau with fields ``a`` and ``b`` (shared with the user tableaus of
+    suite/cell/user/methods.py)."""
+
+    @property
+    def stages(self) -> int:
+        return len(self.b)
+
+    @property
+    def explicit(self) -> bool:
+        return all(self.a[i][j] == 0 for i in range(self.stages) for j in range(i, self.stages))
+
+
 @dataclass(frozen=True)
-class Tableau:
+class Tableau(TableauShape):
     """A Runge-Kutta tableau with exact entries (Fraction, or Surd p + q√d) where they exist.
 
     Checks on construction: the rows of A sum to c and every order condition up to ``order``
@@ -113,14 +126,6 @@ class Tableau:
                     else float(Fraction(target) - rest)
             return tuple(out)
         return (tuple(rounded(row, c) for row, c in zip(self.a, self.c)), rounded(self.b, 1))
-
-    @property
-    def stages(self) -> int:
-        return len(self.b)
-
-    @property
-    def explicit(self) -> bool:
-        return all(self.a[i][j] == 0 for i in range(self.stages) for j in range(i, self.stages))
 
 
 def tableau(a, b, c, order, tol=0) -> Tableau:

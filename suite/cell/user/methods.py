@@ -23,6 +23,7 @@ from fractions import Fraction
 from pathlib import Path
 
 from gnibench.methods.base import H_PARAM, NEWTON_PARAMS, Method
+from gnibench.methods.tableau import TableauShape
 from gnibench.suite.cell.user.entries import Entry
 from gnibench.suite.cell.user.precision import _float_rk_check, printed_digits, printed_rtol
 from gnibench.suite.cell.user.properties import check_declared, tolerance
@@ -34,22 +35,16 @@ KEYS = {"explicit-rk": ("c", "A", "b", "b_hat", "order_hat"), "implicit-rk": ("c
         "partitioned-rk": ("u", "v"), "composition": ("basis", "gamma"), "python": ("entry",),
         "python-solver": ("entry", "rtol", "atol")}
 TOL_DIGITS = 50
+
+
 @dataclass(frozen=True)
-class Tab:
+class Tab(TableauShape):
     """A tableau as the kernel generators read it (entries: nearest doubles, as Fractions)."""
 
     a: tuple
     b: tuple
     c: tuple
     order: int
-
-    @property
-    def stages(self) -> int:
-        return len(self.b)
-
-    @property
-    def explicit(self) -> bool:
-        return all(self.a[i][j] == 0 for i in range(self.stages) for j in range(i, self.stages))
 
     @property
     def doubles(self) -> tuple[tuple[tuple[float, ...], ...], tuple[float, ...]]:
