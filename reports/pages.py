@@ -173,6 +173,7 @@ def experiment_page(res, img_dir: Path, slug: str, thresholds, jobs) -> dict:
     except (OSError, ValueError):
         samples = None
     sections = problem_sections(cells["problem"])
+    page["problem_ids"] = short_problems(cells["problem"])
     for i, problem in enumerate(dict.fromkeys(sections)):
         part = cells[sections == problem]
         prefix = f"{i:02d}-" + re.sub(r"[^A-Za-z0-9._-]+", "_", str(problem))[:40]
@@ -215,10 +216,31 @@ def problem_sections(problems):
                      index=problems.index)
 
 
+SHORT_SPEC = 40
+
+
+def short_problems(problems) -> list[str]:
+    """The problems of an experiment as the index card names them: a spec of at most
+    ``SHORT_SPEC`` characters as it is, a longer one by its id, and a problem run from several
+    specs by its id and their number (the page itself lists every spec)."""
+    from gnibench.suite.cell.spec import item_id
+
+    specs = list(dict.fromkeys(str(p) for p in problems))
+    ids = [item_id(text, "problem") for text in specs]
+    out = []
+    for pid in dict.fromkeys(ids):
+        mine = [t for t, i in zip(specs, ids) if i == pid]
+        if len(mine) > 1:
+            out.append(f"{pid} ({len(mine)} parameter sets)")
+        else:
+            out.append(mine[0] if len(mine[0]) <= SHORT_SPEC else pid)
+    return out
+
+
 def index_entry(page: dict) -> dict:
     """What the index shows of an experiment page."""
     return {k: page[k] for k in ("slug", "name", "title", "reference", "complete", "cells_done",
                                  "cells_total", "statuses")} | {
-        "problems": [p["name"] for p in page["problems"]],
+        "problems": page["problem_ids"],
         "has_figure": bool(page.get("figure")),
         "thumb": next(iter((page.get("figure") or {}).get("images") or []), "")}

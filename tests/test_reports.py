@@ -211,3 +211,16 @@ def test_tiny_work_precision_with_competitors(tmp_path):
     rows = re.findall(r"<tr>\s*<td>([^<]*)</td><td><code>([^<]*)</code></td>", html)
     ranks = {fam: rank for rank, fam in rows}
     assert ranks["dop853"] == "1" and ranks["heyoka-taylor"] == "–" and ranks["rebound-ias15"] == "–"
+
+
+def test_index_card_names_problems_briefly():
+    """The index card: a short spec as it is, a long one by its id, several specs of one problem
+    by the id and their number (the experiment page lists them all)."""
+    from gnibench.reports.pages import SHORT_SPEC, short_problems
+
+    long = "kepler-3d:mu=39.47841760435743,a=1,e=0.8,i=0.7853981633974483"
+    assert len(long) > SHORT_SPEC
+    assert short_problems(["kepler-2d:e=0.6", "kepler-2d:e=0.6", long]) == ["kepler-2d:e=0.6",
+                                                                            "kepler-3d"]
+    assert short_problems(["lotka-volterra:u0=2,v0=2", "lotka-volterra:u0=4,v0=8",
+                           "pendulum"]) == ["lotka-volterra (2 parameter sets)", "pendulum"]
