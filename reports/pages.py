@@ -216,13 +216,10 @@ def problem_sections(problems):
                      index=problems.index)
 
 
-SHORT_SPEC = 40
-
-
 def short_problems(problems) -> list[str]:
-    """The problems of an experiment as the index card names them: a spec of at most
-    ``SHORT_SPEC`` characters as it is, a longer one by its id, and a problem run from several
-    specs by its id and their number (the page itself lists every spec)."""
+    """The problems of an experiment as the index card names them: each spec briefly
+    (:func:`gnibench.reports.plots.brief`), a problem run from several specs by its id and their
+    number (the page itself lists every spec)."""
     from gnibench.suite.cell.spec import item_id
 
     specs = list(dict.fromkeys(str(p) for p in problems))
@@ -230,10 +227,7 @@ def short_problems(problems) -> list[str]:
     out = []
     for pid in dict.fromkeys(ids):
         mine = [t for t, i in zip(specs, ids) if i == pid]
-        if len(mine) > 1:
-            out.append(f"{pid} ({len(mine)} parameter sets)")
-        else:
-            out.append(mine[0] if len(mine[0]) <= SHORT_SPEC else pid)
+        out.append(f"{pid} ({len(mine)} parameter sets)" if len(mine) > 1 else plots.brief(mine[0]))
     return out
 
 

@@ -35,6 +35,23 @@ class Figure:
     caption: str
 
 
+BRIEF = 40
+
+
+def brief(problem: str) -> str:
+    """A problem spec as a title or an index card names it: as it is up to ``BRIEF`` characters,
+    else by its id (the page's section heading shows the whole spec)."""
+    from gnibench.suite.cell.spec import item_id
+    from gnibench.suite.foundation.errors import UserError
+
+    if len(problem) <= BRIEF:
+        return problem
+    try:
+        return item_id(problem, "problem")
+    except (UserError, ValueError):          # a section label: "id (n initial values)"
+        return problem[:BRIEF - 1] + "…"
+
+
 def pick_cells(cells) -> tuple[list[int], str]:
     """The cells to draw (ids) and a note when not all of them are drawn."""
     ids = [int(c) for c in cells["cell"]]
@@ -50,7 +67,11 @@ def pick_cells(cells) -> tuple[list[int], str]:
 
 
 def _label(row) -> str:
-    label = str(row["method"])
+    """A curve's name in a legend: its group's label where the experiment gives one (the method
+    specs of [B] Fig 10's observer and penalty cells differ only after 48 characters), else its
+    method spec; at most 48 characters."""
+    label = row.get("label")
+    label = str(label) if isinstance(label, str) and label.strip() else str(row["method"])
     return label if len(label) <= 48 else label[:45] + "…"
 
 
@@ -173,7 +194,7 @@ def time_figures(problem: str, cells, samples, out_dir: Path, prefix: str, slug:
             panel, z = _panel(cells, by_cell, ids, f"err_{name}", style, name, memo=memo,
                               shade=shade)
             panel.ylabel = f"|{name}(y(t)) − {name}(y0)|"
-            panel.title = f"{problem}: error of {name}"
+            panel.title = f"{brief(problem)}: error of {name}"
             panels.append(panel)
             zeros += z
         cap = ("Invariant errors against time (log scale; legend: growth exponent in t of the "
@@ -186,14 +207,14 @@ def time_figures(problem: str, cells, samples, out_dir: Path, prefix: str, slug:
                           shade=shade)
         panel.ylabel = "global error |y − y_ref|"
         refs = sorted({r for r in cells["reference"].fillna("") if r}) if "reference" in cells else []
-        panel.title = f"{problem}: global error" + (f" (against {', '.join(refs)})" if refs else "")
+        panel.title = f"{brief(problem)}: global error" + (f" (against {', '.join(refs)})" if refs else "")
         add(f"{prefix}-global-error.png", _grid([panel]), f"{problem}: global error",
             f"Global error against time (legend: its growth exponent in t). {note}".strip())
     if ids and "eta" in traj and traj["eta"].notna().any():
         panel, _ = _panel(cells, by_cell, ids, "eta", style, "eta", with_exponent=False,
                           shade=shade)
         panel.ylabel = "η(nT) (rad)"
-        panel.title = f"{problem}: η(nT), angle between q(0) and q(nT)"
+        panel.title = f"{brief(problem)}: η(nT), angle between q(0) and q(nT)"
         add(f"{prefix}-eta.png", _grid([panel]), f"{problem}: η(nT)",
             "η(nT) at whole periods ([B] §5.2, Fig 12), log scale.")
     if "crossing" in samples and samples["crossing"].notna().any():

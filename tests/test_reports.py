@@ -216,11 +216,26 @@ def test_tiny_work_precision_with_competitors(tmp_path):
 def test_index_card_names_problems_briefly():
     """The index card: a short spec as it is, a long one by its id, several specs of one problem
     by the id and their number (the experiment page lists them all)."""
-    from gnibench.reports.pages import SHORT_SPEC, short_problems
+    from gnibench.reports.pages import short_problems
+    from gnibench.reports.plots import BRIEF, brief
 
     long = "kepler-3d:mu=39.47841760435743,a=1,e=0.8,i=0.7853981633974483"
-    assert len(long) > SHORT_SPEC
+    assert len(long) > BRIEF
     assert short_problems(["kepler-2d:e=0.6", "kepler-2d:e=0.6", long]) == ["kepler-2d:e=0.6",
                                                                             "kepler-3d"]
     assert short_problems(["lotka-volterra:u0=2,v0=2", "lotka-volterra:u0=4,v0=8",
                            "pendulum"]) == ["lotka-volterra (2 parameter sets)", "pendulum"]
+    label = "a-problem-with-a-long-id-and-many-starts (12 initial values)"
+    assert brief(label) == label[:BRIEF - 1] + "…"
+
+
+def test_legend_names_a_curve_by_its_group_label_else_its_method():
+    """[B] Fig 10's observer and penalty cells: method specs equal in their first 48 characters,
+    told apart in the legend by their groups' labels."""
+    from gnibench.reports.plots import _label
+
+    spec = "dopri5:adaptive=true,rtol=1e-06,atol=1e-06,hmax=1,max_steps=100000000"
+    assert _label({"label": "(1) DOPRI + observer", "method": spec + "+observer"}) == \
+        "(1) DOPRI + observer"
+    assert _label({"label": "", "method": "rk4:h=0.1"}) == "rk4:h=0.1"
+    assert _label({"label": None, "method": spec}) == spec[:45] + "…"
