@@ -239,3 +239,14 @@ def test_legend_names_a_curve_by_its_group_label_else_its_method():
         "(1) DOPRI + observer"
     assert _label({"label": "", "method": "rk4:h=0.1"}) == "rk4:h=0.1"
     assert _label({"label": None, "method": spec}) == spec[:45] + "…"
+
+
+def test_every_registered_method_has_its_own_colour():
+    """The methods of one work-precision diagram (all the registered ones) get distinct colours:
+    the palette names each of them, none twice (a hashed colour can repeat)."""
+    from gnibench.methods import METHODS
+    from gnibench.reports.figures.style import PALETTE
+
+    assert [m for m in METHODS if m not in PALETTE] == []
+    colours = [PALETTE[m].upper() for m in METHODS]
+    assert [m for m, c in zip(METHODS, colours) if colours.count(c) > 1] == []

@@ -33,6 +33,15 @@ PALETTE = {
     "yoshida8": "#88CCEE",
     "lie-poisson": "#882255",
     "generating-function4": "#999933",
+    "vern6": "#FF7F0E",             # the high-accuracy families (issue 19): own colours, not
+    "vern7": "#C51B7D",             # the hashed EXTRA ones, which gave vern6 and feagin10 (and
+    "vern8": "#4D9221",             # vern8, suzuki4 and kahan-li6) one colour in the same
+    "vern9": "#542788",             # work-precision diagram
+    "feagin10": "#FFD92F",
+    "suzuki4": "#BF812D",
+    "mclachlan4": "#35978F",
+    "kahan-li6": "#A6D854",
+    "kahan-li8": "#F46D43",
     "heyoka-taylor": "#661100",
     "rebound-ias15": "#6699CC",
     "rebound-whfast": "#AA4499",
