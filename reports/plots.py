@@ -38,6 +38,11 @@ class Figure:
 BRIEF = 40
 
 
+def clip(text: str, width: int) -> str:
+    """``text`` cut to ``width`` characters, an ellipsis marking the cut."""
+    return text if len(text) <= width else text[:width - 1] + "…"
+
+
 def brief(problem: str) -> str:
     """A problem spec as a title or an index card names it: as it is up to ``BRIEF`` characters,
     else by its id (the page's section heading shows the whole spec)."""
@@ -49,7 +54,7 @@ def brief(problem: str) -> str:
     try:
         return item_id(problem, "problem")
     except (UserError, ValueError):          # a section label: "id (n initial values)"
-        return problem[:BRIEF - 1] + "…"
+        return clip(problem, BRIEF)
 
 
 def pick_cells(cells) -> tuple[list[int], str]:
@@ -72,7 +77,7 @@ def _label(row) -> str:
     method spec; at most 48 characters."""
     label = row.get("label")
     label = str(label) if isinstance(label, str) and label.strip() else str(row["method"])
-    return label if len(label) <= 48 else label[:45] + "…"
+    return clip(label, 48)
 
 
 def _log_x(ts: list[np.ndarray]) -> bool:

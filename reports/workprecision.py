@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 from gnibench.reports.drawing import Job
 from gnibench.reports.palette import styles
-from gnibench.reports.plots import Figure, layout
+from gnibench.reports.plots import Figure, brief, clip, layout
 from gnibench.reports.render import Panel, Plot, Series
 
 
@@ -74,15 +74,14 @@ def wp_figures(problem: str, cells, wall_by_cell: dict[int, float], out_dir: Pat
                 panel.series.append(Series(x[good][order], y[good][order], {
                     "color": st["color"], "linestyle": st["linestyle"], "marker": st["marker"],
                     "markersize": 4, "linewidth": 1.2,
-                    "label": fam if len(fam) <= 40 else fam[:37] + "…"}))
+                    "label": clip(fam, 40)}))
             panels.append(panel)
     panels[0].title, panels[1].title = "against f-evaluations", "against wall time"
-    name = problem if len(problem) <= 60 else problem[:57] + "…"
     labelled = any(s.style.get("label") for p in panels for s in p.series)
     size = (12.4, 3.9 * len(rows) + 0.6)
     adjust = layout(size, len(rows), right=0.74 if labelled else 0.98)   # room for 40-character labels
     adjust["top"] = 1 - 0.75 / size[1]
-    plot = Plot(size, len(rows), 2, panels, adjust, suptitle=f"{name}: work-precision",
+    plot = Plot(size, len(rows), 2, panels, adjust, suptitle=f"{brief(problem)}: work-precision",
                 suptitle_style={"fontsize": 11, "x": 0.42, "y": 0.995},
                 legend={"loc": "upper right", "bbox_to_anchor": (1.0, 0.955), "fontsize": 7.5,
                         "framealpha": 0.9})

@@ -238,7 +238,7 @@ def test_legend_names_a_curve_by_its_group_label_else_its_method():
     assert _label({"label": "(1) DOPRI + observer", "method": spec + "+observer"}) == \
         "(1) DOPRI + observer"
     assert _label({"label": "", "method": "rk4:h=0.1"}) == "rk4:h=0.1"
-    assert _label({"label": None, "method": spec}) == spec[:45] + "…"
+    assert _label({"label": None, "method": spec}) == spec[:47] + "…"
 
 
 def test_every_registered_method_has_its_own_colour():
