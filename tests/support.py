@@ -86,3 +86,20 @@ def synthetic_trajectory(spec: str, t, y, *, exact_reference: bool = False, kind
         integral_names=pk.integral_names, integrals=pk.integrals(y), H0=pk.at(y0), y0=y0,
         status=Status.OK, kind=kind, chart=chart, reference=reference,
         provenance=dict(provenance or {}))
+
+
+def section_oscillator(monkeypatch, oid: str):
+    """The harmonic oscillator q' = p, p' = -q with the section {q = 0, p > 0}, registered for
+    one test under the id ``oid`` (its own kernels): it rotates (q, p) rigidly, so its crossings
+    are known in closed form."""
+    import dataclasses
+
+    from gnibench import problems
+    from gnibench.problems.base import Section
+
+    rec = dataclasses.replace(
+        problems.REGISTRY["harmonic-oscillator"], id=oid,
+        sections=(Section(name="q=0,p>0", g=lambda S: S.q, condition=lambda S: S.p,
+                          coords=("p",)),))
+    monkeypatch.setitem(problems.REGISTRY, oid, rec)
+    return rec

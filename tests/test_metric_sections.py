@@ -10,13 +10,10 @@ tests/test_sections.py).
 """
 from __future__ import annotations
 
-import dataclasses
 import math
 
 import numpy as np
 import pytest
-from gnibench import problems
-from gnibench.problems.base import Section
 from gnibench.suite.cell.solve import solve
 from gnibench.suite.metrics.compute import apply, parse_metrics
 
@@ -27,13 +24,9 @@ H, K = 0.01, 20
 
 @pytest.fixture
 def osc(monkeypatch):
-    """The harmonic oscillator with the section {q = 0, p > 0} (a new id: its own kernels)."""
-    rec = dataclasses.replace(
-        problems.REGISTRY["harmonic-oscillator"], id=OSC_ID,
-        sections=(Section(name="q=0,p>0", g=lambda S: S.q, condition=lambda S: S.p,
-                          coords=("p",)),))
-    monkeypatch.setitem(problems.REGISTRY, OSC_ID, rec)
-    return rec
+    from support import section_oscillator   # here: a subprocess imports this module too
+
+    return section_oscillator(monkeypatch, OSC_ID)
 
 
 def closed_form_points(h: float, k: int) -> np.ndarray:

@@ -9,16 +9,13 @@ before it; only for a method with tiny global error is it also the exact crossin
 """
 from __future__ import annotations
 
-import dataclasses
 import io
 import math
 
 import numpy as np
 import pandas as pd
 import pytest
-from gnibench import problems
 from gnibench.problems import REGISTRY
-from gnibench.problems.base import Section
 from gnibench.suite.cell.sections import crossing_intervals
 from gnibench.suite.cell.solve import solve
 from gnibench.suite.cli.main import main
@@ -34,12 +31,9 @@ TOL = 1e-13
 
 @pytest.fixture
 def osc(monkeypatch):
-    rec = dataclasses.replace(
-        REGISTRY["harmonic-oscillator"], id=OSC_ID,
-        sections=(Section(name="q=0,p>0", g=lambda S: S.q, condition=lambda S: S.p,
-                          coords=("p",)),))
-    monkeypatch.setitem(problems.REGISTRY, OSC_ID, rec)
-    return rec
+    from support import section_oscillator   # here: a subprocess imports this module too
+
+    return section_oscillator(monkeypatch, OSC_ID)
 
 
 
