@@ -102,13 +102,16 @@ def test_held_out_mutants_from_a_file(tmp_path, capsys):
     assert m.id == "h" and m.file == "methods/kernels/newton.py"
     for text, why in [(good.replace('plausible = "p"\n', ""), "missing ['plausible']"),
                       (good + 'severity = 3\n', "unknown keys ['severity']"),
-                      ("[[mutant]\n", "not valid TOML")]:
+                      ("[[mutant]\n", "not valid TOML"),
+                      ("mutant = [1]\n", "bad mutant 1; allowed: [[mutant]] tables")]:
         with pytest.raises(UserError, match=re.escape(why)):
             M.load_catalog(text, "held.toml")
     outside = M.Mutant("o", "../outside.py", "a", "b", "d", "p")
     assert "outside the package" in M.check(outside)
     out = tmp_path / "out"
-    for arg, why in [(str(tmp_path / "none.toml"), "no such file"),
+    (tmp_path / "latin1.toml").write_bytes(b"# \xe9\n")
+    for arg, why in [(str(tmp_path / "none.toml"), "no --mutants file"),
+                     (str(tmp_path / "latin1.toml"), "is not UTF-8 text"),
                      (str(tmp_path / "empty.toml"), "lists no [[mutant]]")]:
         (tmp_path / "empty.toml").write_text("# nothing\n")
         assert main(["verify", "--mutants", arg, "-o", str(out)]) == 2

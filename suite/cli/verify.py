@@ -140,11 +140,9 @@ def mutants_command(a) -> int:
     if a.mutants == "all":
         chosen = catalog
     elif a.mutants.endswith(".toml"):             # held-out mutants, the catalog's schema
-        path = Path(a.mutants)
-        if not path.is_file():
-            raise UserError(f"bad --mutants {a.mutants!r}: no such file; allowed: mutant ids of "
-                            f"the catalog, or a TOML file of [[mutant]] entries")
-        chosen, _ = mutants.load_catalog(path.read_text(encoding="utf-8"), str(path))
+        from gnibench.suite.foundation.tomlfile import read_text_file
+
+        chosen, _ = mutants.load_catalog(read_text_file(a.mutants, "--mutants file"), a.mutants)
         if not chosen:
             raise UserError(f"bad --mutants {a.mutants!r}: it lists no [[mutant]]")
     else:

@@ -36,7 +36,6 @@ import shutil
 import subprocess
 import sys
 import time
-import tomllib
 from dataclasses import asdict, dataclass
 from importlib import resources
 from pathlib import Path
@@ -80,16 +79,17 @@ _REQUIRED = ("id", "file", "original", "replacement", "description", "plausible"
 def load_catalog(text: str | None = None, source: str = "mutant catalog") -> tuple[list[Mutant], dict]:
     """The mutants and the settings (``tests``: the test files run against each mutant) of the
     shipped catalog, or of ``text`` (a file of held-out ``[[mutant]]`` entries, same schema)."""
-    try:
-        doc = tomllib.loads(catalog_text() if text is None else text)
-    except tomllib.TOMLDecodeError as e:
-        raise UserError(f"{source}: not valid TOML: {e}") from None
+    from gnibench.suite.foundation.tomlfile import load_toml
+
+    doc = load_toml(catalog_text() if text is None else text, source)
     settings = {k: v for k, v in doc.items() if k != "mutant"}
     mutants, seen = [], set()
     entries = doc.get("mutant", [])
     if not isinstance(entries, list):
         raise UserError(f"{source}: bad mutant; allowed: [[mutant]] entries")
     for entry in entries:
+        if not isinstance(entry, dict):
+            raise UserError(f"{source}: bad mutant {entry!r}; allowed: [[mutant]] tables")
         ident = entry.get("id", "?")
         bad = sorted(set(entry) - _KEYS)
         missing = [k for k in _REQUIRED if not isinstance(entry.get(k), str) or not entry[k]]
