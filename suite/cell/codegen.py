@@ -195,11 +195,14 @@ _loaded: dict[str, Any] = {}
 def _import(text: str, prefix: str):
     """Import a generated module from the kernel cache (writing it there first if needed).
 
-    The file is named by the hash of the generated text (and of the inliner's source) and holds
+    The file is named by the hash of the generated text (and of the inliner's source and
+    ``INLINED``) and holds
     that text with the small functions written into their callers (:func:`_inline`; done once,
     when the file is written: it costs more than generating the text), under a first line with
     the checksum of the rest."""
-    key = hashlib.sha256((text + _inliner_digest()).encode()).hexdigest()[:20]
+    # the inliner's source and what it is told to write inline decide the file's text too
+    key = hashlib.sha256((text + INLINED[prefix].pattern + _inliner_digest()).encode()
+                         ).hexdigest()[:20]
     if key in _loaded:
         return _loaded[key]
     d = cache_dir("kernels")

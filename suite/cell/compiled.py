@@ -102,10 +102,7 @@ def _compile(problem: Bound, method) -> CompiledCell:
         idx = [pk.integral_names.index(x) for x in m.values["on"]]
         extra.extend(m.record.runtime(m.values, [h0_all[k] for k in idx]))
     par = np.concatenate([pk.par, np.array(extra, dtype=np.float64)])
-    cell = CompiledCell(kernel, pk.kernel, pk.integral_names, pk.par, par, y0, h0_all, 0.0)
-    if pk.integral_names:
-        pk.integrals(np.array([y0]))
-    return cell
+    return CompiledCell(kernel, pk.kernel, pk.integral_names, pk.par, par, y0, h0_all, 0.0)
 
 
 def dense_output_refusal(problem: Bound, method) -> str:
