@@ -24,12 +24,13 @@ def apsides(mu: float, p_phi: float, H0: float) -> tuple[float, float, float]:
 
 
 def _level_deviation(mu: float, p_phi: float, H0: float, H: np.ndarray) -> float:
-    """The largest relative deviation of the apsides of the levels H from those of H0."""
+    """The largest relative deviation of the apsides of the levels H from those of H0 (the
+    roots r_p < r_a of H1(r, p_r = 0) = H, [B] (4.1): monotone in H)."""
     r_p, r_a, _ = apsides(mu, p_phi, H0)
     if not (np.all(np.isfinite(H)) and np.all(H < 0)):
         return math.inf                       # a level that is not a bound orbit
     worst = 0.0
-    for h in (float(np.min(H)), float(np.max(H))):    # r_p, r_a are monotone in H
+    for h in (float(np.min(H)), float(np.max(H))):
         p, a, _ = apsides(mu, p_phi, h)
         worst = max(worst, abs(p - r_p) / r_p, abs(a - r_a) / r_a)
     return worst
@@ -39,7 +40,7 @@ def kepler_radial_apsides(cells, samples) -> dict:
     """For every selected cell over its last ten orbits: ``deviation`` = the largest relative
     deviation of the sampled min r and max r from r_p and r_a (needs samples that resolve the
     apsides: many per orbit), and ``level_deviation`` = that of the apsides of the level H1 of
-    every sample (a point of the 1-degree-of-freedom system (4.1) lies on the exact orbit of its
+    every sample (a point of the 1-degree-of-freedom system [B] (4.1) lies on the exact orbit of its
     own level, so this is the orbit's shape whatever the sampling); ``samples_per_orbit``; and
     sup H1 over the run (elliptic: < 0). Worst and best (``best``, ``level_best``) over the
     cells, e.g. the points of a sweep over μ, p_φ."""

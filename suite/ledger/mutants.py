@@ -36,7 +36,7 @@ import shutil
 import subprocess
 import sys
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import MISSING, asdict, dataclass, fields
 from importlib import resources
 from pathlib import Path
 
@@ -72,8 +72,8 @@ def catalog_text() -> str:
     return (resources.files("gnibench.suite") / "mutants" / "catalog.toml").read_text("utf-8")
 
 
-_KEYS = {"id", "file", "original", "replacement", "description", "plausible", "blind_spot", "more"}
-_REQUIRED = ("id", "file", "original", "replacement", "description", "plausible")
+_KEYS = {f.name for f in fields(Mutant)}
+_REQUIRED = tuple(f.name for f in fields(Mutant) if f.default is MISSING)
 
 
 def load_catalog(text: str | None = None, source: str = "mutant catalog") -> tuple[list[Mutant], dict]:

@@ -88,14 +88,13 @@ def discover() -> None:
         raise
 
 
-def load_paths(value: str | None = None) -> list[str]:
-    """The files named by ``GNIBENCH_LOAD`` (or ``value``): entries separated by ``:`` (``;`` on
+def load_paths() -> list[str]:
+    """The files named by ``GNIBENCH_LOAD``: entries separated by ``:`` (``;`` on
     Windows), blanks around an entry ignored. Empty entries (``::``, a leading or trailing
     ``:``) are skipped, so that ``GNIBENCH_LOAD="$GNIBENCH_LOAD:defs.toml"`` works whether it was
     set or not (unlike PATH, where an empty entry is the current directory); every other entry
     must be a definitions file (a missing one is an error, not skipped)."""
-    value = os.environ.get(ENV, "") if value is None else value
-    return [p.strip() for p in value.split(os.pathsep) if p.strip()]
+    return [p.strip() for p in os.environ.get(ENV, "").split(os.pathsep) if p.strip()]
 
 
 def loaded() -> dict[str, list[tuple[str, str]]]:
