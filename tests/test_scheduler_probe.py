@@ -39,8 +39,11 @@ class Peer:
             except OSError:
                 return
             self.connections.append(conn)
-            if self.reply is not None:
-                conn.sendall(self.reply)
+            self._on_connect(conn)
+
+    def _on_connect(self, conn):
+        if self.reply is not None:
+            conn.sendall(self.reply)
 
     def close(self):
         self.sock.close()
@@ -84,14 +87,8 @@ class LinePeer(Peer):
     """A server of a line-based protocol (Redis, SMTP): it answers only once the client has sent
     a line."""
 
-    def _serve(self):
-        while True:
-            try:
-                conn, _ = self.sock.accept()
-            except OSError:
-                return
-            self.connections.append(conn)
-            threading.Thread(target=self._answer, args=(conn,), daemon=True).start()
+    def _on_connect(self, conn):
+        threading.Thread(target=self._answer, args=(conn,), daemon=True).start()
 
     def _answer(self, conn):
         got = b""

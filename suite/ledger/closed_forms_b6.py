@@ -173,17 +173,18 @@ def slug(label: str) -> str:
     return re.sub(r"[^a-z0-9]+", "_", str(label).lower()).strip("_")
 
 
-def gs_section_trace(cells, samples) -> dict:
-    """The statistics of every selected cell (see the module docstring)."""
+def per_cell(cells, stats) -> dict:
+    """``stats(row)`` of every selected cell: its names as they are for one cell, suffixed by the
+    cell's label (:func:`slug`) for several; and ``cells``, their number."""
     out: dict = {}
-    stats = []
     for row in cells.itertuples():
-        rows = samples[samples["cell"] == row.cell]
-        s = cell_stats(row.problem, rows)
-        stats.append(s)
-        if len(cells) > 1:
-            out.update({f"{k}_{slug(row.label)}": v for k, v in s.items()})
-    if len(stats) == 1:
-        out.update(stats[0])
+        s = stats(row)
+        out.update(s if len(cells) == 1 else {f"{k}_{slug(row.label)}": v for k, v in s.items()})
     out["cells"] = float(len(cells))
     return out
+
+
+def gs_section_trace(cells, samples) -> dict:
+    """The statistics of every selected cell (see the module docstring)."""
+    return per_cell(cells, lambda row: cell_stats(row.problem,
+                                                  samples[samples["cell"] == row.cell]))

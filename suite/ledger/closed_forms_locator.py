@@ -137,19 +137,9 @@ def cell_precision(row, samples) -> dict:
 
 def section_locator_precision(cells, samples) -> dict:
     """The values of the module docstring for every selected cell."""
-    from gnibench.suite.ledger.closed_forms_b6 import slug
+    from gnibench.suite.ledger.closed_forms_b6 import per_cell
 
-    out: dict = {}
-    stats = []
-    for row in cells.itertuples():
-        s = cell_precision(row, samples)
-        stats.append(s)
-        if len(cells) > 1:
-            out.update({f"{k}_{slug(row.label)}": v for k, v in s.items()})
-    if len(stats) == 1:
-        out.update(stats[0])
-    out["cells"] = float(len(cells))
-    return out
+    return per_cell(cells, lambda row: cell_precision(row, samples))
 
 
 CLOSED_FORMS = {"section_locator_precision": section_locator_precision}
