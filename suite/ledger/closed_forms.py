@@ -254,9 +254,14 @@ CLOSED_FORMS.update(closed_forms_b41.CLOSED_FORMS)     # [B] §4.1: the radial K
 CLOSED_FORMS.update(closed_forms_locator.CLOSED_FORMS)  # [B] §6.2: the located section points
 
 
-def run(name: str, cells, samples) -> dict:
+def check_name(name: str) -> None:
+    """KeyError for a closed form nobody defined."""
     if name not in CLOSED_FORMS:
         raise KeyError(f"unknown closed form {name!r} (known: {', '.join(CLOSED_FORMS)})")
+
+
+def run(name: str, cells, samples) -> dict:
+    check_name(name)
     if cells.empty:
         raise LookupError("no cell selected for the closed form")
     return CLOSED_FORMS[name](cells, samples)

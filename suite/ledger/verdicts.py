@@ -204,8 +204,7 @@ class _Reader:
 
     def closed_form(self, restrict=None) -> dict:
         chosen = self.chosen(self.claim.cells, restrict)
-        if self.claim.closed_form not in closed_forms.CLOSED_FORMS:
-            raise KeyError(f"unknown closed form {self.claim.closed_form!r}")
+        closed_forms.check_name(self.claim.closed_form)     # a typo before the runs' status
         self.runs_checked(chosen)
         return closed_forms.run(self.claim.closed_form, chosen, self.samples)
 
