@@ -35,12 +35,11 @@ def _clean(x):
     return x
 
 
-def _number(v):
-    """A table value for JSON: a float, None for a missing one (NaN, or pandas' NA of a nullable
-    integer column such as the ``steps`` a Python solver did not report)."""
-    import pandas as pd
-
-    return None if v is pd.NA else _clean(float(v))
+def _numbers(column) -> list:
+    """A table column for JSON: floats, None for a missing value (NaN, inf, or pandas' NA of a
+    nullable integer column such as the ``steps`` a Python solver did not report)."""
+    values = column.to_numpy(dtype=float, na_value=math.nan).tolist()
+    return [x if math.isfinite(x) else None for x in values]
 
 
 def write_parquet(df, path: Path, meta: dict) -> None:
@@ -78,7 +77,7 @@ def write_frame(df, meta: dict, fmt: str, out: Path | None, stdout) -> None:
         else:
             atomic_write(out, lambda p: df.to_csv(p, index=False))
     elif fmt == "json":
-        doc = {"meta": meta, "columns": {c: [_number(v) for v in df[c]] for c in df.columns}}
+        doc = {"meta": meta, "columns": {c: _numbers(df[c]) for c in df.columns}}
         text = json.dumps(doc, default=str)
         if out is None:
             stdout.write(text + "\n")
