@@ -18,6 +18,7 @@ kernels run in parallel.
 """
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 from collections.abc import Callable, Iterator
@@ -99,6 +100,19 @@ def _serial(groups, progress) -> Iterator[CellOutcome]:
 
 # -- Dask -----------------------------------------------------------------------------------
 
+@contextlib.contextmanager
+def _environ(name: str, value: str):
+    """``name`` set to ``value`` (unless the user set it) for the block, as it was after."""
+    if name in os.environ:
+        yield
+        return
+    os.environ[name] = value
+    try:
+        yield
+    finally:
+        os.environ.pop(name, None)
+
+
 def _dask(groups, jobs, scheduler) -> Iterator[CellOutcome]:
     from distributed import Client, LocalCluster, as_completed
 
@@ -112,11 +126,13 @@ def _dask(groups, jobs, scheduler) -> Iterator[CellOutcome]:
         try:
             # no dashboard, and the scheduler's HTTP server on a free local port (on its default
             # 8787, taken by another cluster, it warned on stderr); the workers log critical
-            # errors only (a Ctrl-C cancels their cells: Dask's warnings about that are no news)
-            os.environ.setdefault("DASK_LOGGING__DISTRIBUTED", "critical")
-            cluster = LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True,
-                                   dashboard_address=None,
-                                   scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})
+            # errors only (a Ctrl-C cancels their cells: Dask's warnings about that are no news;
+            # the setting is read by the worker processes as they start, and then taken back, so
+            # the caller's own clusters, in a notebook say, keep their logging)
+            with _environ("DASK_LOGGING__DISTRIBUTED", "critical"):
+                cluster = LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True,
+                                       dashboard_address=None,
+                                       scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})
             client = Client(cluster)
         finally:
             signal.pthread_sigmask(signal.SIG_UNBLOCK, blocked)
