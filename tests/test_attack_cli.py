@@ -8,12 +8,14 @@ standard streams that close or fill up.
 """
 from __future__ import annotations
 
+import contextlib
 import errno
 import json
 import os
 import stat
 import subprocess
 import sys
+import threading
 from pathlib import Path
 
 import pandas as pd
@@ -215,19 +217,33 @@ def test_cells_that_ended_in_error_are_computed_again(tmp_path, capsys, monkeypa
     assert list(pd.read_parquet(out / "cells.parquet")["status"]) == ["ok"] * 4
 
 
+def _unblock(fifo: Path, stop: threading.Event, every: float = 20.0) -> None:
+    """Open ``fifo`` for writing and close it every ``every`` seconds until ``stop``: a reader
+    blocked on it (the bug) then reads an end of file and the test fails instead of hanging.
+    Without a reader the non-blocking open fails at once and nothing happens."""
+    while not stop.wait(every):
+        with contextlib.suppress(OSError):
+            os.close(os.open(fifo, os.O_WRONLY | os.O_NONBLOCK))
+
+
 @pytest.mark.parametrize("kind", ["fifo", "device", "directory"])
 def test_input_files_are_regular_files(kind, tmp_path, capsys):
     """A FIFO given as --load or as the experiment blocked the read for ever, /dev/zero never
     ended it (memory grew without a bound): refused before they are read."""
     path = {"fifo": tmp_path / "in.toml", "device": Path("/dev/zero"),
             "directory": tmp_path / "dir.toml"}[kind]
+    stop = threading.Event()
     if kind == "fifo":
         os.mkfifo(path)
+        threading.Thread(target=_unblock, args=(path, stop), daemon=True).start()
     elif kind == "directory":
         path.mkdir()
-    for argv in (SOLVE + ["--load", str(path)], ["run", str(path), "-o", str(tmp_path / "o")]):
-        code, _out, err = run(argv, capsys)
-        assert "allowed: a regular file" in one_error_line(code, err)
+    try:
+        for argv in (SOLVE + ["--load", str(path)], ["run", str(path), "-o", str(tmp_path / "o")]):
+            code, _out, err = run(argv, capsys)
+            assert "allowed: a regular file" in one_error_line(code, err)
+    finally:
+        stop.set()
     assert not (tmp_path / "o").exists()
 
 
