@@ -81,27 +81,21 @@ def check_numba_settings(environ=None) -> None:
 
 
 def _check_cache_dir(text: str) -> None:
-    """A directory numba can write (or create): numba silently ignores one it cannot use."""
+    """A directory numba can write (or create): numba silently ignores one it cannot use. The
+    same checks as an output directory's (:func:`gnibench.suite.foundation.outputs.check_output_dir`),
+    a file created and removed in the nearest existing directory included."""
+    from gnibench.suite.foundation.outputs import _check_dir
+
     if text == "":                       # numba: not set
         return
-    why = _cache_dir_fault(Path(text)) if text.strip() else "a blank name"
-    if why:
-        raise UserError(f"bad NUMBA_CACHE_DIR={_shown(text)}: {why}; allowed: unset (numba's "
-                        f"files then stay with the kernels under GNIBENCH_CACHE_DIR) or a "
-                        f"writable directory, or one that can be created")
-
-
-def _cache_dir_fault(path: Path) -> str | None:
-    existing = path
+    what = f"NUMBA_CACHE_DIR={_shown(text)}"
+    allowed = ("allowed: unset (numba's files then stay with the kernels under "
+               "GNIBENCH_CACHE_DIR) or a writable directory, or one that can be created")
+    if not text.strip():
+        raise UserError(f"bad {what}: a blank name; {allowed}")
     try:
-        while not existing.exists() and existing != existing.parent:
-            if existing.is_symlink():        # a dangling symlink: nothing can be created there
-                return f"{existing} is a broken symlink"
-            existing = existing.parent
-        if not existing.is_dir():
-            return "it is not a directory" if existing == path else f"{existing} is not a directory"
-        if not os.access(existing, os.W_OK | os.X_OK):
-            return f"cannot write in {existing}"
-    except OSError as e:                     # a name too long, a loop of symlinks
-        return e.strerror or str(e)
-    return None
+        _check_dir(Path(text), what)
+    except OSError as e:                 # a name too long, a loop of symlinks
+        raise UserError(f"bad {what}: {e.strerror or e}; {allowed}") from None
+    except UserError as e:
+        raise UserError(f"{e}; {allowed}") from None
