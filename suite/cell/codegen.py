@@ -40,7 +40,7 @@ from gnibench.suite.foundation.cache import (
 )
 from gnibench.suite.foundation.status import kernel_constants
 from gnibench.suite.foundation.inline import inline_source
-from gnibench.suite.foundation.templates import Context, template, tuple_helpers
+from gnibench.suite.foundation.templates import Context, store_source, template, tuple_helpers
 
 
 def field_source(ctx: Context, modifiers, offsets) -> str:
@@ -180,9 +180,8 @@ def problem_source(problem) -> tuple[str, dict]:
 
     ptext, meta = problem_code(problem.record)
     q = len(meta["integrals"])
-    stores = "".join(f"    A[j, {k}] = t[{k}]\n" for k in range(q)) or "    pass\n"
     parts = [_header(meta["n"]), ptext, tuple_helpers(meta["n"]),
-             f"\n@njit(cache=True, inline='always')\ndef store_integrals(t, A, j):\n{stores}",
+             "\n" + store_source("store_integrals", q),
              template(driver.eval_invariants, {"store": "store_integrals"})]
     if problem.record.sections:    # Hénon's trick on the base field, for scanned samples
         parts += [henon_source(meta["n"], "base_f"), locate_all_source()]

@@ -60,7 +60,6 @@ def tuple_helpers(n: int) -> str:
     items = ", ".join(f"a[{i}]" for i in range(n))
     shifted = ", ".join(f"y[{i}] + Z[j, {i}]" for i in range(n))
     comma = "," if n == 1 else ""
-    stores = "\n".join(f"    A[j, {i}] = t[{i}]" for i in range(n))
     return f'''
 @njit(cache=True, inline='always')
 def to_tuple(a):
@@ -70,7 +69,11 @@ def to_tuple(a):
 def shifted(y, Z, j):
     return ({shifted}{comma})
 
-@njit(cache=True, inline='always')
-def store(t, A, j):
-{stores}
-'''
+{store_source("store", n)}'''
+
+
+def store_source(name: str, width: int) -> str:
+    """``name(t, A, j)``: row j of A set to the tuple t of ``width`` components, unrolled and
+    marked for inlining."""
+    body = "".join(f"    A[j, {i}] = t[{i}]\n" for i in range(width)) or "    pass\n"
+    return f"@njit(cache=True, inline='always')\ndef {name}(t, A, j):\n{body}"
