@@ -33,7 +33,7 @@ from __future__ import annotations
 import numpy as np
 from gnibench.methods import dop853_coefficients as dop853
 from gnibench.methods.kernels import events, sampling
-from gnibench.methods.tableau import lit
+from gnibench.methods.tableau import weighted
 from gnibench.suite.foundation.templates import template
 
 HENON_RTOL = 1e-15            # agreement of the results with m and 2m substeps
@@ -54,9 +54,8 @@ def _tup(items: list[str]) -> str:
 def _lincomb(z: str | None, h: str, terms, n1: int) -> str:
     """z + h (c0 v0 + ...) over the n+1 components (z None: a zero base, 0.0 + h (...)), written
     where it is used (not a helper function: see methods/explicit_rk.py ``lincomb``)."""
-    comps = [f"{'0.0' if z is None else f'{z}[{i}]'} + {h} * ("
-             + " + ".join(f"{lit(c)} * {v}[{i}]" for c, v in terms) + ")" for i in range(n1)]
-    return _tup(comps)
+    return _tup([f"{'0.0' if z is None else f'{z}[{i}]'} + {w}"
+                 for i, w in enumerate(weighted(h, terms, n1))])
 
 
 def _run(name: str, rhs: str, n1: int) -> str:

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from gnibench.methods.base import Method
 from gnibench.methods.summation import compensated
-from gnibench.methods.tableau import Tableau, lit, tableau
+from gnibench.methods.tableau import Tableau, tableau, weighted
 
 EULER = tableau([[0]], [1], [0], order=1)                               # [HLW] (1.5)
 RK4 = tableau([[0, 0, 0, 0], ["1/2", 0, 0, 0], [0, "1/2", 0, 0], [0, 0, 1, 0]],
@@ -23,15 +23,12 @@ def lincomb(y: str, h: str, terms, n: int) -> str:
     a tuple display written where it is used: the same operations a helper function of the
     coefficients did, without compiling one helper per number of terms (numba's per-function cost
     was most of their compile time)."""
-    comps = [f"{y}[{i}] + {h} * (" + " + ".join(f"{lit(c)} * {v}[{i}]" for c, v in terms) + ")"
-             for i in range(n)]
-    return _tuple(comps)
+    return _tuple([f"{y}[{i}] + {w}" for i, w in enumerate(weighted(h, terms, n))])
 
 
 def _increment(h: str, terms, n: int) -> str:
     """h (c0 v0 + ...) componentwise: the increment of :func:`lincomb`, by the same operations."""
-    return _tuple([f"{h} * (" + " + ".join(f"{lit(c)} * {v}[{i}]" for c, v in terms) + ")"
-                   for i in range(n)])
+    return _tuple(weighted(h, terms, n))
 
 
 def _tuple(comps: list[str]) -> str:

@@ -139,3 +139,11 @@ def lit(x) -> str:
     """A coefficient as a float literal that numba folds as a constant (nearest double)."""
     return repr(float(x))
 
+
+def weighted(h: str, terms, n: int) -> list[str]:
+    """``h * (c0 * v0[i] + c1 * v1[i] + ...)`` for i < n, over the (coefficient, stage name)
+    ``terms``: the increment of a Runge-Kutta stage or step, [HLW] (1.5)-(1.7), II.1.1, as source
+    text written where it is used."""
+    return [f"{h} * (" + " + ".join(f"{lit(c)} * {v}[{i}]" for c, v in terms) + ")"
+            for i in range(n)]
+
