@@ -70,8 +70,8 @@ def field_source(ctx: Context, modifiers, offsets) -> str:
     # step modifiers (projection) map each accepted step, in the order given
     chain = "".join(f"    y, s = proj{k}(y, par)\n    if s != STATUS_OK:\n        return y, s\n"
                     for k in projections)
-    parts.append(f"\n@njit(cache=True{', inline=' + repr('always') if not chain else ''})\n"
-                 f"def project(y, par):\n{chain}    return y, STATUS_OK\n")
+    deco = "@njit(cache=True)" if chain else "@njit(cache=True, inline='always')"
+    parts.append(f"\n{deco}\ndef project(y, par):\n{chain}    return y, STATUS_OK\n")
     return "".join(parts)
 
 
