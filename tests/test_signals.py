@@ -366,3 +366,21 @@ def test_a_sigterm_as_the_handlers_start_is_one_line_and_exit_143():
     out = subprocess.run([sys.executable, "-c", SIGNAL_ESCAPING_THE_COMMAND], check=False,
                          capture_output=True, text=True, timeout=SAFETY)
     assert out.returncode == 143, out.stderr[-2000:]
+
+
+def test_an_interrupted_dask_run_goes_through_kill_workers(monkeypatch):
+    """The run above ends and its workers end with or without the kill (cluster.close would end
+    them too, in about 4 s): here an interruption of the Dask executor is seen to kill them."""
+    pytest.importorskip("distributed")
+    from gnibench.suite.runs import executors
+    from gnibench.suite.runs.experiment import load_experiment
+
+    killed = []
+    real = executors._kill_workers
+    monkeypatch.setattr(executors, "_kill_workers", lambda c: (killed.append(c), real(c)))
+    cells = load_experiment("quick", "paper").cells[:3]
+    outcomes = executors._dask([[c] for c in cells], 2, None)
+    assert next(outcomes).status is not None
+    with pytest.raises(KeyboardInterrupt):
+        outcomes.throw(KeyboardInterrupt)
+    assert len(killed) == 1
