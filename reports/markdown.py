@@ -5,6 +5,7 @@
 """
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 
@@ -29,14 +30,20 @@ def _count(x) -> str:
     return f"{x:.0f}" if float(x).is_integer() else f"{x:.1f}"
 
 
-_MARKDOWN_SPECIAL = set("\\`*_{}[]()<>#+-.!|~")
+_MARKDOWN_SPECIAL = set("\\`*_|~")             # markup wherever they stand
+_LINK_END = re.compile(r"\](?=[(\[:])")          # [text](url), [text][ref], [ref]: url
+_LINE_START = re.compile(r"[#+=\[-]|\d{1,9}(?=[.)](\s|$))")  # heading, list item, underline
 _HTML = {"&": "&amp;", "<": "&lt;", ">": "&gt;", '"': "&quot;"}
 
 
 def escape(text) -> str:
     """User or file text made inert in Markdown (and in the HTML a Markdown renderer makes of
-    it): HTML specials become entities, Markdown punctuation is backslash-escaped, and line
-    breaks become spaces, so no input can add markup, script, headings or tables."""
+    it): HTML specials become entities, the characters that make markup wherever they stand
+    (emphasis, code, tables, strikethrough) are backslash-escaped, and so are a ``]`` that would
+    close a link's text and a first character that would start a heading, a list or a link
+    reference definition; line breaks become spaces. No input can add markup, script, links,
+    headings or tables, and prose keeps its citations, periods, hyphens and parentheses as they
+    are (``[HLW] (1.5), h = 0.1``)."""
     out = []
     for c in " ".join(str(text).split()):
         if c in _HTML:
@@ -45,7 +52,12 @@ def escape(text) -> str:
             out.append("\\" + c)
         else:
             out.append(c)
-    return "".join(out)
+    text = _LINK_END.sub(r"\\]", "".join(out))
+    m = _LINE_START.match(text)
+    if m is None:
+        return text
+    cut = m.end() if text[0].isdigit() else 0         # "1." and "1)": before the delimiter
+    return text[:cut] + "\\" + text[cut:]
 
 
 def escape_block(text) -> str:
