@@ -64,7 +64,8 @@ def generate_irk(tab: Tableau):
         else:
             solver = template(irk.stages, inline=True)
         return ("\n" + "\n".join(consts) + "\n" + template(irk.make_ws, inline=True) + solver
-                + template(irk.step, inline=True) + template(irk.step_sum, inline=True))
+                + template(irk.increment, inline=True) + template(irk.step, inline=True)
+                + template(irk.step_sum, inline=True))
 
     return generate
 

@@ -25,6 +25,7 @@ from gnibench.methods.kernels.free import (
     N,
     S,
     carry_add,
+    carry_apply,
     f,
     fjac,
     lu_solve,
@@ -93,17 +94,22 @@ def stages(y, h, par, ws):
     return nfev, njev, status
 
 
+def increment(ws):
+    """Σ_j d_j Z_j (d = bᵀA⁻¹, from the stage increments Z in ws[0]) as a tuple, through ws[6]."""
+    Z, out = ws[0], ws[6]
+    for i in range(N):
+        acc = 0.0
+        for j in range(S):
+            acc += D[j] * Z[j, i]
+        out[i] = acc
+    return to_tuple(out)
+
+
 def step(y, h, par, ws):
     nfev, njev, s = stages(y, h, par, ws)
     y1 = y                     # (one return: written inline, suite/foundation/inline.py)
     if s == STATUS_OK:
-        Z, out = ws[0], ws[6]
-        for i in range(N):
-            acc = 0.0
-            for j in range(S):
-                acc += D[j] * Z[j, i]
-            out[i] = y[i] + acc
-        y1 = to_tuple(out)
+        y1 = carry_apply(y, increment(ws))
     return y1, nfev, njev, s
 
 
@@ -145,11 +151,5 @@ def step_sum(y, e, h, par, ws):
     nfev, njev, s = stages(y, h, par, ws)
     y1, e1 = y, e
     if s == STATUS_OK:
-        Z, out = ws[0], ws[6]
-        for i in range(N):
-            acc = 0.0
-            for j in range(S):
-                acc += D[j] * Z[j, i]
-            out[i] = acc
-        y1, e1 = carry_add(y, e, to_tuple(out))
+        y1, e1 = carry_add(y, e, increment(ws))
     return y1, e1, nfev, njev, s
