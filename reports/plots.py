@@ -71,13 +71,20 @@ def pick_cells(cells) -> tuple[list[int], str]:
     return sorted(picked[:MAX_CURVES]), note
 
 
-def _label(row) -> str:
-    """A curve's name in a legend: its group's label where the experiment gives one (the method
-    specs of [B] Fig 10's observer and penalty cells differ only after 48 characters), else its
-    method spec; at most 48 characters."""
-    label = row.get("label")
-    label = str(label) if isinstance(label, str) and label.strip() else str(row["method"])
-    return clip(label, 48)
+def curve_labels(cells, ids) -> dict[int, str]:
+    """The name of each drawn cell in a legend or a title: its method spec when it fits in 48
+    characters; else its group's label when no other drawn cell has that label (the specs of
+    [B] Fig 10's observer and penalty cells differ only after 48 characters); else the spec cut
+    to 48 characters."""
+    rows = {int(r["cell"]): r for r in cells.to_dict("records")}
+    names = {cid: rows[cid].get("label") for cid in ids}
+    names = {cid: g.strip() if isinstance(g, str) else "" for cid, g in names.items()}
+    out = {}
+    for cid in ids:
+        spec, group = str(rows[cid]["method"]), names[cid]
+        unique = group and list(names.values()).count(group) == 1
+        out[cid] = clip(group if len(spec) > 48 and unique else spec, 48)
+    return out
 
 
 def _log_x(ts: list[np.ndarray]) -> bool:
@@ -132,6 +139,7 @@ def _panel(cells, by_cell, ids, column, style, name, with_exponent=True, memo=No
     zeros = 0
     shade = shades(cells) if shade is None else shade
     rows = {int(r["cell"]): r for r in cells.to_dict("records")}
+    names = curve_labels(cells, ids)
     ts = []
     panel = Panel(yscale="log", xlabel="t", grid=True,
                   legend={"fontsize": 7, "loc": "upper left", "bbox_to_anchor": (1.01, 1.0),
@@ -146,7 +154,7 @@ def _panel(cells, by_cell, ids, column, style, name, with_exponent=True, memo=No
         if not ok.any():
             continue
         ts.append(t[ok])
-        label = f"c{cid} {_label(row)}"
+        label = f"c{cid} {names[cid]}"
         if with_exponent:
             p = exponent(row, s, name, memo)
             label += f"  t^{p:.2f}" if math.isfinite(p) else ""
@@ -249,13 +257,13 @@ def section_plot(problem: str, cells, points, style) -> Plot | None:
     if len(coords) < 2:
         return None
     ids = [int(c) for c in cells["cell"] if c in set(points["cell"])][:MAX_CURVES]
-    panels = []
+    panels, names = [], curve_labels(cells, ids)
     for cid in ids:
         row = cells.loc[cells["cell"] == cid].iloc[0]
         s = points[points["cell"] == cid]
         x, y = s[coords[0]].to_numpy(float), s[coords[1]].to_numpy(float)
         panel = Panel(xlabel=coords[0], ylabel=coords[1], title_size=9,
-                      title=f"cell {cid}: {_label(row)}  ({len(s)} points)")
+                      title=f"cell {cid}: {names[cid]}  ({len(s)} points)")
         if "chart" in s and s["chart"].notna().any():
             panel.series.append(Series(x, y, {
                 "s": 1.5, "c": s["chart"].to_numpy(float), "cmap": "tab10", "vmin": 0.5,

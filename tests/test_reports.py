@@ -229,16 +229,22 @@ def test_index_card_names_problems_briefly():
     assert brief(label) == label[:BRIEF - 1] + "…"
 
 
-def test_legend_names_a_curve_by_its_group_label_else_its_method():
+def test_legend_names_a_curve_by_its_method_else_by_its_own_group_label():
     """[B] Fig 10's observer and penalty cells: method specs equal in their first 48 characters,
-    told apart in the legend by their groups' labels."""
-    from gnibench.reports.plots import _label
+    told apart by their groups' labels; cells of one group (quick: Euler and Störmer-Verlet in
+    the group "explicit Euler and Störmer-Verlet") keep their short specs."""
+    import pandas as pd
+    from gnibench.reports.plots import curve_labels
 
     spec = "dopri5:adaptive=true,rtol=1e-06,atol=1e-06,hmax=1,max_steps=100000000"
-    assert _label({"label": "(1) DOPRI + observer", "method": spec + "+observer"}) == \
-        "(1) DOPRI + observer"
-    assert _label({"label": "", "method": "rk4:h=0.1"}) == "rk4:h=0.1"
-    assert _label({"label": None, "method": spec}) == spec[:47] + "…"
+    cells = pd.DataFrame({"cell": [0, 1, 2, 3, 4],
+                          "label": ["(1) observer", "(2) penalty", "both", "both", None],
+                          "method": [spec + "+observer", spec + "+penalty", "euler:h=0.1",
+                                     "stormer-verlet:h=0.1", spec]})
+    got = curve_labels(cells, [0, 1, 2, 3, 4])
+    assert got == {0: "(1) observer", 1: "(2) penalty", 2: "euler:h=0.1",
+                   3: "stormer-verlet:h=0.1", 4: spec[:47] + "…"}
+    assert curve_labels(cells.assign(label="same"), [0, 1])[0] == spec[:47] + "…"
 
 
 def test_every_registered_method_has_its_own_colour():
