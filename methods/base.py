@@ -58,7 +58,8 @@ class Method(Registered):
     ``definition`` its text.
     ``summation``, when set, offers the option ``sum`` (methods/summation.py) with that default:
     ``plain`` for the seeds' methods, ``compensated`` for high-accuracy families whose round-off
-    would otherwise dominate their truncation error.
+    would otherwise dominate their truncation error. ``runtime`` names the options passed to the
+    compiled step at run time (in ``par``) rather than written into its module.
     """
 
     registry = "method"
@@ -82,6 +83,10 @@ class Method(Registered):
     origin: Any = None
     definition: str = ""             # a user definition's text (part of a stored cell's key)
     summation: str | None = None     # default of the option sum (plain|compensated); None: none
+    #: options the compiled step reads from ``par`` (after the problem's and the modifiers'
+    #: values; ``Context.extra["par_at"]`` gives where) instead of from its module's text: cells
+    #: that differ only in them share one kernel (the iteration counts of a sweep)
+    runtime: tuple[str, ...] = ()
 
     def __post_init__(self):
         if self.kind not in KINDS:

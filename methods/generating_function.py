@@ -162,13 +162,18 @@ def _generate(problem) -> str:
 _texts: dict[str, str] = {}
 
 
-def generating_code(problem) -> str:
-    """The generated text for a problem, from memory, the disk cache, or freshly from sympy."""
+def generating_key(problem) -> str:
+    """What the generated text is a function of: the problem's source and this file's."""
     from gnibench.problems.codegen import _source_hash
 
     source = _source_hash(problem) + inspect.getsource(sys.modules[__name__])
     digest = hashlib.sha256(source.encode()).hexdigest()[:16]
-    key = f"{problem.id}-genfun{ORDER}-{digest}"
+    return f"{problem.id}-genfun{ORDER}-{digest}"
+
+
+def generating_code(problem) -> str:
+    """The generated text for a problem, from memory, the disk cache, or freshly from sympy."""
+    key = generating_key(problem)
     if key not in _texts:
         path = cache_dir("problems") / f"{key}.code.py"
         text = read_checked(path, "generating-function code", parse=bytes.decode)
@@ -184,7 +189,9 @@ def generate(ctx) -> str:
     if ctx.modified:        # refused at validation (field_modifiers_refused); a modified field has no H
         raise UserError("method generating-function4 cannot take a field modifier (observer, penalty)")
     problem = ctx.problem
-    return (f"\nD = {len(problem.canonical[0])}\n" + generating_code(problem)
+    # for the kernel key, the digest of what the text is made from: sympy takes seconds
+    code = f"# {generating_key(problem)}\n" if ctx.keyed else generating_code(problem)
+    return (f"\nD = {len(problem.canonical[0])}\n" + code
             + template(genfun.make_ws) + template(genfun.step))
 
 

@@ -56,9 +56,9 @@ def generate_irk(tab: Tableau):
                   "A = (" + ", ".join("(" + ", ".join(lit(x) for x in row) + ",)"
                                       for row in tab.a) + ",)",
                   "D = (" + ", ".join(lit(x) for x in d) + ",)"]
-        k = int(ctx.values.get("fixed_point", 0))
-        if k:                                   # fixed-point iteration instead of Newton
-            consts.append(f"FIXED_POINT = {k}")
+        if int(ctx.values.get("fixed_point", 0)):   # fixed-point iteration instead of Newton
+            # the number of iterations is read from par: a sweep over it is one kernel
+            consts.append(f"FIXED_POINT_AT = {ctx.extra['par_at']['fixed_point']}")
             solver = template(irk.stages_fixed_point, {"stages_fixed_point": "stages"},
                               inline=True)
         else:
@@ -80,7 +80,7 @@ def irk_method(id, tab, reference, doc, summation="plain", **props):
     return Method(id=id, family="implicit-rk", order=tab.order, reference=reference, doc=doc,
                   generate=generate_irk(tab), data=tab, implicit=True,
                   params=(H_PARAM,) + NEWTON_PARAMS + (FIXED_POINT_PARAM,), summation=summation,
-                  **props)
+                  runtime=("fixed_point",), **props)
 
 
 implicit_euler = irk_method("implicit-euler", IMPLICIT_EULER, "[HLW] (1.6)", "implicit Euler method")

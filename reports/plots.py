@@ -71,12 +71,17 @@ def pick_cells(cells) -> tuple[list[int], str]:
     return sorted(picked[:MAX_CURVES]), note
 
 
+def _rows(cells, ids) -> dict[int, dict]:
+    """The rows of the cells ``ids`` as dicts, by cell id (only those: a sweep has hundreds)."""
+    return {int(r["cell"]): r for r in cells[cells["cell"].isin(ids)].to_dict("records")}
+
+
 def curve_labels(cells, ids) -> dict[int, str]:
     """The name of each drawn cell in a legend or a title: its method spec when it fits in 48
     characters; else its group's label when no other drawn cell has that label (the specs of
     [B] Fig 10's observer and penalty cells differ only after 48 characters); else the spec cut
     to 48 characters."""
-    rows = {int(r["cell"]): r for r in cells.to_dict("records")}
+    rows = _rows(cells, ids)
     names = {cid: rows[cid].get("label") for cid in ids}
     names = {cid: g.strip() if isinstance(g, str) else "" for cid, g in names.items()}
     out = {}
@@ -138,7 +143,7 @@ def _panel(cells, by_cell, ids, column, style, name, with_exponent=True, memo=No
     out."""
     zeros = 0
     shade = shades(cells) if shade is None else shade
-    rows = {int(r["cell"]): r for r in cells.to_dict("records")}
+    rows = _rows(cells, ids)
     names = curve_labels(cells, ids)
     ts = []
     panel = Panel(yscale="log", xlabel="t", grid=True,

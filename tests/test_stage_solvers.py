@@ -54,3 +54,18 @@ def test_newton_and_fixed_point_agree_on_kepler():
     assert fixed.njev[-1] == 0
     diff = float(np.max(np.abs(newton.y - fixed.y)))
     assert diff <= 1e-12 * float(np.max(np.abs(newton.y))), f"{diff:.3e}"
+
+
+def test_the_iteration_count_is_read_at_run_time():
+    """``fixed_point=N`` is a runtime option (Method.runtime, passed in par): a sweep over N is one
+    kernel, and each cell still runs its own N (nfev = stages x sweeps while not converged)."""
+    from gnibench.suite.cell.compiled import kernel_key
+    from gnibench.suite.cell.spec import prepare
+
+    keys = {n: kernel_key(*prepare("harmonic-oscillator", f"implicit-euler:h=0.5{n}"))
+            for n in (",fixed_point=2", ",fixed_point=3", "")}
+    assert keys[",fixed_point=2"] == keys[",fixed_point=3"] != keys[""]
+    for n in (2, 3):
+        traj = solve("harmonic-oscillator", f"implicit-euler:h=0.5,fixed_point={n}", steps=5,
+                     every=5)
+        assert traj.nfev[-1] == 5 * n and traj.njev[-1] == 5     # never converged in n sweeps

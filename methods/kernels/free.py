@@ -9,7 +9,7 @@ def _unbound(*args):  # pragma: no cover - only reached if a template is called 
     raise RuntimeError("kernel template called outside a generated module")
 
 
-N = S = NI = NE = NEWTON_MAXIT = FIXED_POINT = 0
+N = S = NI = NE = NEWTON_MAXIT = FIXED_POINT_AT = 0
 A = C = D = I_IDX = E_IDX = ()
 EXPLICIT = False
 f = fjac = to_tuple = shifted = store = _unbound

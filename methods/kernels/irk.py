@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 from gnibench.methods.kernels.free import (
-    FIXED_POINT,
+    FIXED_POINT_AT,
     NEWTON_MAXIT,
     STATUS_NEWTON_FAILED,
     STATUS_OK,
@@ -114,8 +114,9 @@ def step(y, h, par, ws):
 
 
 def stages_fixed_point(y, h, par, ws):
-    """At most FIXED_POINT fixed-point iterations for Z (in ws[0]): (nfev, njev, status), njev
-    1.0 when the iteration has not converged (the step is accepted all the same)."""
+    """At most ``fixed_point`` fixed-point iterations for Z (in ws[0]; the count is the method's
+    runtime option, ``par[FIXED_POINT_AT]``): (nfev, njev, status), njev 1.0 when the iteration
+    has not converged (the step is accepted all the same)."""
     Z, F = ws[0], ws[1]
     scale = 1.0
     for i in range(N):
@@ -125,7 +126,7 @@ def stages_fixed_point(y, h, par, ws):
     nfev = 0.0
     njev = 1.0
     prev = np.inf
-    for it in range(FIXED_POINT):
+    for it in range(int(par[FIXED_POINT_AT])):
         for j in range(S):
             store(f(shifted(y, Z, j), par), F, j)
         nfev += S

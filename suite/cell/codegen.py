@@ -40,6 +40,7 @@ from gnibench.suite.foundation.cache import (
 )
 from gnibench.suite.foundation.status import kernel_constants
 from gnibench.suite.foundation.inline import inline_source
+from gnibench.suite.foundation.numba_typing import install as install_typing_memo
 from gnibench.suite.foundation.templates import Context, store_source, template, tuple_helpers
 
 
@@ -117,8 +118,9 @@ def _header(n: int, newton_maxit: int = 50, compensated: bool = False) -> str:
             + kernel_constants() + slot_constants() + event_constants())
 
 
-def module_source(problem, method_cfg) -> tuple[str, dict]:
-    """The full text of a cell's module, and the problem metadata."""
+def module_source(problem, method_cfg, keyed: bool = False) -> tuple[str, dict]:
+    """The full text of a cell's module, and the problem metadata. ``keyed``: the text is only
+    hashed into the kernel key (:attr:`Context.keyed`)."""
     from gnibench.methods.events import grid_functions, section_functions, variant
     from gnibench.methods.kernels import driver, linalg, newton
     from gnibench.methods.summation import carry_source, compensated
@@ -127,14 +129,17 @@ def module_source(problem, method_cfg) -> tuple[str, dict]:
     ptext, meta = problem_code(problem.record)
     mods = method_cfg.modifiers
     fields = [m for m in mods if m.record.kind == "field"]
-    ctx = Context(n=meta["n"], meta=meta, values=method_cfg.base.values, modified=bool(fields),
-                  explicit_u=meta["explicit_u"] and not fields,
-                  explicit_v=meta["explicit_v"] and not fields, problem=problem.record)
     offsets = []
     off = len(problem.record.model_params)
     for m in mods:
         offsets.append(off)
         off += m.record.runtime_size(m.values)
+    # the method's runtime options follow the modifiers' values in par (suite/cell/compiled.py)
+    par_at = {name: off + i for i, name in enumerate(method_cfg.base.record.runtime)}
+    ctx = Context(n=meta["n"], meta=meta, values=method_cfg.base.values, modified=bool(fields),
+                  explicit_u=meta["explicit_u"] and not fields,
+                  explicit_v=meta["explicit_v"] and not fields, problem=problem.record,
+                  keyed=keyed, extra={"par_at": par_at})
     head = _header(meta["n"], method_cfg.base.values.get("newton_maxit", 50),
                    compensated(method_cfg.base.values))
     if problem.record.post_step is not None:
@@ -199,11 +204,10 @@ def _import(text: str, prefix: str):
     that text with the small functions written into their callers (:func:`_inline`; done once,
     when the file is written: it costs more than generating the text), under a first line with
     the checksum of the rest."""
-    # the inliner's source and what it is told to write inline decide the file's text too
-    key = hashlib.sha256((text + INLINED[prefix].pattern + _inliner_digest()).encode()
-                         ).hexdigest()[:20]
+    key = _module_key(text, prefix)
     if key in _loaded:
         return _loaded[key]
+    install_typing_memo()         # numba asks the same typing question once (numba_typing.py)
     d = cache_dir("kernels")
     path = d / f"{prefix}_{key}.py"
     if path.exists():
@@ -227,6 +231,23 @@ def _import(text: str, prefix: str):
     spec.loader.exec_module(kernel)
     _loaded[key] = kernel
     return kernel
+
+
+def _module_key(text: str, prefix: str) -> str:
+    """The name of a generated module's file: the hash of its text, of the inliner's source and of
+    what it is told to write inline (they decide the file's text too)."""
+    return hashlib.sha256((text + INLINED[prefix].pattern + _inliner_digest()).encode()
+                          ).hexdigest()[:20]
+
+
+def compiled_before(text: str, prefix: str = "cell") -> bool:
+    """Whether the module of this text is in the kernel cache with numba's files beside it (a
+    guess for scheduling, not a check: :func:`_import` verifies what it loads)."""
+    key = _module_key(text, prefix)
+    if key in _loaded:
+        return True
+    path = cache_dir("kernels") / f"{prefix}_{key}.py"
+    return path.exists() and any(path.parent.glob(f"__pycache__/{path.stem}.*.nbi"))
 
 
 @functools.cache

@@ -101,6 +101,8 @@ def _compile(problem: Bound, method) -> CompiledCell:
     for m in method.modifiers:
         idx = [pk.integral_names.index(x) for x in m.values["on"]]
         extra.extend(m.record.runtime(m.values, [h0_all[k] for k in idx]))
+    base = method.base      # then the method's runtime options (Method.runtime), in that order
+    extra.extend(float(base.values[name]) for name in base.record.runtime)
     par = np.concatenate([pk.par, np.array(extra, dtype=np.float64)])
     return CompiledCell(kernel, pk.kernel, pk.integral_names, pk.par, par, y0, h0_all, 0.0)
 
@@ -124,13 +126,23 @@ def dense_output_refusal(problem: Bound, method) -> str:
 
 def kernel_key(problem: Bound, method) -> str:
     """What a cell compiles: the hash of its generated module's text (of the transformed system
-    for a transformed problem), or the external engine and problem."""
+    for a transformed problem; a part sympy takes seconds to make stands as the digest of what it
+    is made from, :attr:`~gnibench.suite.foundation.templates.Context.keyed`), or the external
+    engine and problem."""
+    return kernel_plan(problem, method)[0]
+
+
+def kernel_plan(problem: Bound, method) -> tuple[str, int]:
+    """The kernel key (:func:`kernel_key`) and a guess of what compiling it costs: the length of
+    the module's text when it is not in the kernel cache yet (a text with a keyed part never is
+    found there: it counts as not compiled), else 0; 0 for an engine."""
     import hashlib
 
-    from gnibench.suite.cell.codegen import module_source
+    from gnibench.suite.cell.codegen import compiled_before, module_source
 
     if method.kind != "compiled":
-        return f"engine:{method.base.record.engine}:{problem.id}"
+        return f"engine:{method.base.record.engine}:{problem.id}", 0
     target = problem.record.transformed(problem.values) or problem
-    text, _ = module_source(target, method)
-    return hashlib.sha256(text.encode()).hexdigest()[:20]
+    text, _ = module_source(target, method, keyed=True)
+    key = hashlib.sha256(text.encode()).hexdigest()[:20]
+    return key, 0 if compiled_before(text) else len(text)

@@ -29,6 +29,9 @@ class Context:
     explicit_v: bool
     extra: dict = field(default_factory=dict)
     problem: Any = None        # the problem record, for methods built from its model (generating-function4)
+    #: the text is only hashed (the kernel key that groups cells, suite/cell/compiled.py): a part
+    #: that is a costly but deterministic function of named inputs may stand as their digest
+    keyed: bool = False
 
 
 def template(func, rename: dict[str, str] | None = None, inline: bool = False) -> str:

@@ -6,7 +6,8 @@ Every executor takes the cells to compute, grouped by compiled kernel
 assembled in cell order afterwards, so they do not depend on the executor or the number of
 workers). The first cell of each group runs before the rest of its group: it compiles the kernel
 once, into the disk cache, and the other cells, wherever they run, load it. Compiles of different
-kernels run in parallel.
+kernels run in parallel, in the order of the groups: the runner puts the kernels not compiled yet
+first, the costliest first (:func:`gnibench.suite.runs.runner._groups`).
 
 * ``serial`` (``-j 1``): in this process, in cell order.
 * ``local`` (default, ``-j N``, N = the number of cores): a pool of forked workers

@@ -9,15 +9,15 @@ and keep the kernels they loaded.
   then forks the others from itself, ready at once. Once the cells to compute are known the pool is fitted to them (:meth:`Pool.fit`:
   idle workers beyond their number end, more are forked when ``-j`` asks for more than the
   cores). The workers are children of the command, so a signal to it or its death ends them.
-* **By kernel, longest first, one cell queued ahead.** Each worker has its own pipe and holds
-  the cell it runs and the next one (while there are cells enough for all workers), so that it
-  never waits for the parent (busy storing a result, or not scheduled on a loaded machine)
-  between two cells. The first cell
-  of a kernel group runs alone (it compiles the kernel into the disk cache); once it is done, the
-  rest of the group goes preferably to the worker that ran it (the kernel is loaded there), a free
-  worker takes a group not yet started (kernels compile in parallel), and only then helps with
-  the largest group under way (it loads the kernel from the disk cache). Within a group the
-  longest cells go first (:func:`longest_first`), so that short ones fill the end of the run.
+* **By kernel, in the order given, longest first, one cell queued ahead.** Each worker has its
+  own pipe and holds the cell it runs and the next one (while there are cells enough for all
+  workers), so that it never waits for the parent (busy storing a result, or not scheduled on a
+  loaded machine) between two cells. The first cell of a kernel group runs alone (it compiles
+  the kernel into the disk cache); once it is done, the rest of the group goes preferably to the
+  worker that ran it (the kernel is loaded there), a free worker takes the next group not yet
+  started (kernels compile in parallel), and only then helps with the largest group under way
+  (it loads the kernel from the disk cache). Within a group the longest cells go first
+  (:func:`longest_first`), so that short ones fill the end of the run.
 * **Quiet workers** (:func:`gnibench.suite.foundation.processes.quiet_worker`): SIGINT ignored
   (Ctrl-C reaches the whole process group: the parent decides), SIGTERM ends them, they die with
   their parent. A worker reports the progress of a long cell through its pipe. When the run ends

@@ -47,7 +47,7 @@ from gnibench.suite.foundation.outputs import fault
 from gnibench.suite.foundation.provenance import versions
 from gnibench.suite.foundation.status import Status
 from gnibench.suite.runs import executors
-from gnibench.suite.runs.cellwork import CellOutcome, kernel_group
+from gnibench.suite.runs.cellwork import CellOutcome, kernel_plan
 from gnibench.suite.runs.experiment import Experiment, load_experiment
 from gnibench.suite.runs.progress import RunProgress
 from gnibench.suite.runs.store import Part, Store, cell_key
@@ -184,11 +184,18 @@ def _reusable(part: Part | None) -> bool:
 
 
 def _groups(cells) -> list[list]:
-    """Cells grouped by compiled kernel, groups and cells in cell order."""
+    """Cells grouped by compiled kernel, cells in cell order. The groups whose kernel must be
+    compiled come first, the costliest first (by the length of its generated text: compiling
+    takes a few tenths of a second to ten seconds, and a costly kernel left to the end of a run
+    is compiled while the other workers have nothing left to do), then the others in cell
+    order. Which worker runs a cell never changes its numbers."""
     groups: dict[str, list] = {}
+    cost: dict[str, int] = {}
     for c in cells:
-        groups.setdefault(kernel_group(c), []).append(c)
-    return list(groups.values())
+        key, cost[key] = kernel_plan(c)
+        groups.setdefault(key, []).append(c)
+    order = sorted(groups, key=lambda k: -cost[k])       # stable: ties stay in cell order
+    return [groups[k] for k in order]
 
 
 def _part(o: CellOutcome) -> Part:
