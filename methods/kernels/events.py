@@ -92,21 +92,25 @@ def henon_crossing(y, t, t_next, par, st):
 def henon_converge(z0, d, par, in_time):
     """(y, t) carried over d in g (Hénon's system) or in time (``in_time``) by DOP853 with
     m = 2, 4, ... equal substeps until two successive results agree to HENON_RTOL
-    (|z_2m - z_m| <= HENON_RTOL max(1, |z_2m|)), at most HENON_MAX_SUBSTEPS: (z, m, nfev)."""
-    m = 2
-    prev = flow_run(z0, d, m, par) if in_time else henon_run(z0, d, m, par)
-    nfev = HENON_STAGES * m
+    (|z_2m - z_m| <= HENON_RTOL max(1, |z_2m|)), at most HENON_MAX_SUBSTEPS: (z, m, nfev).
+
+    Every call of the runs is in the loop, with m computed: a literal m = 2 at a call of its own
+    made numba compile each run twice (for ``Literal[int](2)`` and for int64)."""
+    m = 1
+    prev = z0
+    nfev = 0.0
     while m < HENON_MAX_SUBSTEPS:
         m *= 2
         cur = flow_run(z0, d, m, par) if in_time else henon_run(z0, d, m, par)
         nfev += HENON_STAGES * m
-        agree = True
-        for i in range(N + 1):
-            if not abs(cur[i] - prev[i]) <= HENON_RTOL * max(1.0, abs(cur[i])):
-                agree = False
-                break
-        if agree:
-            return cur, m, nfev
+        if m > 2:
+            agree = True
+            for i in range(N + 1):
+                if not abs(cur[i] - prev[i]) <= HENON_RTOL * max(1.0, abs(cur[i])):
+                    agree = False
+                    break
+            if agree:
+                return cur, m, nfev
         prev = cur
     return prev, m, nfev
 
