@@ -178,11 +178,16 @@ def dense_grid_rows() -> str:
                                          "GRID_SAMPLE": "grid_sample_adaptive"}, inline=True)
 
 
-def section_functions(n: int) -> str:
+def section_functions(n: int, locator_from: str = "") -> str:
     """What the section drivers call: the crossing test, the writer, Hénon's locator and
-    ``section_rows`` (a step's crossing by Hénon's trick)."""
+    ``section_rows`` (a step's crossing by Hénon's trick). ``locator_from``: the name of a loaded
+    module whose ``henon_locate`` integrates the same field (the problem's own module, for a cell
+    whose field no modifier changes): the cell calls it instead of compiling a copy of its own
+    (Hénon's locator was about half of a section cell's compilation)."""
+    locator = henon_source(n) if not locator_from else (
+        f"\nimport sys as _sys\n\nhenon_locate = _sys.modules[{locator_from!r}].henon_locate\n")
     return (template(events.crosses, inline=True) + template(events.section_event, inline=True)
-            + template(events.henon_crossing, inline=True) + henon_source(n)
+            + template(events.henon_crossing, inline=True) + locator
             + template(sampling.section_rows, {"SECTION_DENSE": "False"}, inline=True))
 
 

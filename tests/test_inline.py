@@ -17,16 +17,36 @@ from gnibench.suite.cell.spec import prepare
 from gnibench.suite.foundation.inline import BIG_TUPLE, inline_source
 
 
-def _python(text: str) -> dict:
-    """The functions of a generated module as plain Python."""
+def _python(text: str, problem=None) -> dict:
+    """The functions of a generated module as plain Python. A cell module of a problem with a
+    section takes Hénon's locator from the problem's module (suite/cell/codegen.py): that one
+    is run as plain Python too, under its name, while the cell's module is executed."""
+    import sys
+    import types
+
+    from gnibench.suite.cell.codegen import problem_module_name, problem_source
+
     namespace: dict = {}
-    exec(compile(re.sub(r"^@njit\(.*\)\n", "", text, flags=re.M), "<module>", "exec"), namespace)
+    name = problem_module_name(problem) if problem is not None and problem.record.sections else ""
+    saved = sys.modules.get(name)
+    if name:
+        plain = types.ModuleType(name)
+        plain.__dict__.update(_python(problem_source(problem)[0]))
+        sys.modules[name] = plain
+    try:
+        exec(compile(re.sub(r"^@njit\(.*\)\n", "", text, flags=re.M), "<module>", "exec"),
+             namespace)
+    finally:
+        if name and saved is not None:
+            sys.modules[name] = saved
+        elif name:
+            del sys.modules[name]
     return namespace
 
 
 def _run(text: str, problem, method, name: str, args: tuple, rows: int = 40):
     """The driver ``name`` of a module run from the cell's y0 (y_io, st and the output rows)."""
-    ns = _python(text)
+    ns = _python(text, problem)
     rec = problem.record
     y_io = np.zeros((Y_ROWS, rec.dim))
     y_io[0] = rec.y0(problem.values)

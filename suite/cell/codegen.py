@@ -155,7 +155,10 @@ def module_source(problem, method_cfg, keyed: bool = False) -> tuple[str, dict]:
             variant(driver.integrate, "integrate_grid", "GRID",
                     rename={"grid_rows": "grid_rows_fixed"})]
     if problem.record.sections:    # the section drivers' helpers, Hénon's trick on the cell's f
-        body += [section_functions(n), variant(driver.integrate, "integrate_section", "SECTION")]
+        # (the problem's module's locator when f is the problem's field: compiled once per problem)
+        shared = "" if fields else problem_module_name(problem)
+        body += [section_functions(n, shared),
+                 variant(driver.integrate, "integrate_section", "SECTION")]
     return "\n".join(body), meta
 
 
@@ -267,10 +270,19 @@ def _intact(stored: str) -> bool:
 
 
 def load(problem, method_cfg):
-    """Import (generating if needed) the cell's compiled module. Returns (module, meta, seconds)."""
+    """Import (generating if needed) the cell's compiled module. Returns (module, meta, seconds).
+    A problem with a section has its own module imported first: a cell of its unchanged field
+    calls that module's Hénon locator (:func:`problem_module_name`)."""
     t0 = time.perf_counter()
+    if problem.record.sections:
+        load_problem(problem)
     text, meta = module_source(problem, method_cfg)
     return _import(text, "cell"), meta, time.perf_counter() - t0
+
+
+def problem_module_name(problem) -> str:
+    """The name under which the problem's own module is imported (:func:`load_problem`)."""
+    return f"gnibench_problem_{_module_key(problem_source(problem)[0], 'problem')}"
 
 
 def load_problem(problem):
