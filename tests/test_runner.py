@@ -193,3 +193,14 @@ def test_section_cells_write_crossings_and_scale_shortens_them(tmp_path):
         parse_experiment(text.replace("section = 5\n", "section = 5\ndt_out = 1.0\n"), "sec")
     with pytest.raises(UserError, match="no Poincaré section"):
         parse_experiment(text.replace('"henon-heiles"', '"pendulum"'), "sec")
+
+
+def test_kernels_to_compile_come_first_the_costliest_first(monkeypatch):
+    """runner._groups: the groups whose kernel is not compiled yet (cost > 0: the length of its
+    text) first, the costliest first; the compiled ones after, in cell order; cells in order."""
+    from gnibench.suite.runs import runner
+
+    plans = {"a": ("k1", 0), "b": ("k2", 100), "c": ("k1", 0), "d": ("k3", 500), "e": ("k4", 0),
+             "f": ("k2", 100)}
+    monkeypatch.setattr(runner, "kernel_plan", lambda cell: plans[cell])
+    assert runner._groups(list("abcdef")) == [["d"], ["b", "f"], ["a", "c"], ["e"]]

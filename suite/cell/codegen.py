@@ -33,6 +33,7 @@ from typing import Any
 from gnibench.suite.foundation.cache import (
     cache_dir,
     discard,
+    numba_cache_path,
     record_numba_files,
     verify_numba_files,
     warn,
@@ -250,7 +251,7 @@ def compiled_before(text: str, prefix: str = "cell") -> bool:
     if key in _loaded:
         return True
     path = cache_dir("kernels") / f"{prefix}_{key}.py"
-    return path.exists() and any(path.parent.glob(f"__pycache__/{path.stem}.*.nbi"))
+    return path.exists() and any(numba_cache_path(path).glob(f"{path.stem}.*.nbi"))
 
 
 @functools.cache
