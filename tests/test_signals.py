@@ -384,3 +384,22 @@ def test_an_interrupted_dask_run_goes_through_kill_workers(monkeypatch):
     with pytest.raises(KeyboardInterrupt):
         outcomes.throw(KeyboardInterrupt)
     assert len(killed) == 1
+
+
+def test_a_signal_left_pending_when_the_work_ends_is_honoured():
+    """A SIGTERM whose KeyboardInterrupt is dropped (raised in a ``__del__``, as in numba's
+    callbacks) is marked pending for the watchdog; when the command's work ends before the
+    watchdog raises it again, the end of ``handling()`` raises it (it was lost: exit code 0 after
+    a SIGTERM to a pool run, under load)."""
+    from gnibench.suite.cli import signals
+
+    class Dropping:
+        def __del__(self):
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(0.5)                       # the handler runs here; its raise is dropped
+
+    with pytest.raises(KeyboardInterrupt):
+        with signals.handling():
+            item = Dropping()
+            del item                              # the body ends at once: no redelivery here
+    assert signals.exit_code() == 128 + signal.SIGTERM and signals.message() == "terminated"

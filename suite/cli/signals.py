@@ -238,7 +238,7 @@ def handling():
     finally:
         with _state.lock:
             _state.active = False
-            _state.pending = None
+            late, _state.pending = _state.pending, None
         _state.stop.set()
         sys.unraisablehook = _state.previous_unraisable
         signal.set_wakeup_fd(old_wakeup)
@@ -247,3 +247,8 @@ def handling():
         _state.fds = None
         os.close(write_fd)                     # the watchdog reads EOF, ends, closes read_fd
         watcher.join(timeout=5)
+    if late is not None:
+        # a signal marked pending (it came inside numba, or its KeyboardInterrupt was dropped in
+        # a __del__) and the command's work ended before the watchdog raised it again: it is
+        # honoured now, not lost (seen under load: a SIGTERM to a pool run gave exit code 0)
+        raise KeyboardInterrupt
