@@ -77,8 +77,8 @@ def draw_figure(results_dir: str | Path, out_dir: str | Path | None = None,
             path = out / f"{figure['id']}.{ext}"
             fig.savefig(path, metadata=_metadata(figure, ext))
             files.append(path.name)
-            # the SVG keeps the PNG's layout: constrained layout measures every tick label
-            # again at each save (about a third of the drawing time)
+            # the SVG keeps the PNG's layout: constrained layout would measure every tick label
+            # again (the 41 figures of the seeds drawn: 20.2 s -> 18.4 s)
             fig.set_layout_engine("none")
         plt.close(fig)
     if figure["kind"] == "table":

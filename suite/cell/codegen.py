@@ -212,8 +212,7 @@ def _import(text: str, prefix: str):
     if key in _loaded:
         return _loaded[key]
     install_typing_memo()         # numba asks the same typing question once (numba_typing.py)
-    d = cache_dir("kernels")
-    path = d / f"{prefix}_{key}.py"
+    path = _module_path(key, prefix)
     if path.exists():
         try:
             stored = path.read_text()
@@ -244,13 +243,17 @@ def _module_key(text: str, prefix: str) -> str:
                           ).hexdigest()[:20]
 
 
+def _module_path(key: str, prefix: str) -> Path:
+    return cache_dir("kernels") / f"{prefix}_{key}.py"
+
+
 def compiled_before(text: str, prefix: str = "cell") -> bool:
     """Whether the module of this text is in the kernel cache with numba's files beside it (a
     guess for scheduling, not a check: :func:`_import` verifies what it loads)."""
     key = _module_key(text, prefix)
     if key in _loaded:
         return True
-    path = cache_dir("kernels") / f"{prefix}_{key}.py"
+    path = _module_path(key, prefix)
     return path.exists() and any(numba_cache_path(path).glob(f"{path.stem}.*.nbi"))
 
 
