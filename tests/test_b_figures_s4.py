@@ -14,9 +14,10 @@ import pytest
 from gnibench.suite.cli.main import main
 from gnibench.suite.ledger.closed_forms_b41 import apsides
 from gnibench.suite.ledger.entries import load_ledger
+from support_figures import SECTION_FIGURES, check_figure
 
 ROOT = Path(__file__).resolve().parents[1]
-FIGURES = [f"b-fig-{k}" for k in range(1, 9)]
+FIGURES = SECTION_FIGURES["test_b_figures_s4"]
 CLAIMS = [f"B-4.1-{c}" for c in "abcdefghijk"] + ["B-3-d"]   # B-2-f: an aggregate over §5, §6
 
 
@@ -33,6 +34,7 @@ def _declared(fig_id: str) -> dict:
 
 @pytest.mark.parametrize("fig_id", FIGURES)
 def test_figure_files_labels_and_data(reproduced, fig_id):
+    check_figure(reproduced / fig_id)
     folder = reproduced / fig_id / "figure"
     for name in (f"{fig_id}.png", f"{fig_id}.svg", "figure.json"):
         assert (folder / name).is_file() and (folder / name).stat().st_size > 0, name

@@ -9,8 +9,9 @@ from importlib import resources
 import pytest
 from gnibench.suite.cli.main import main
 from gnibench.suite.ledger.entries import load_ledger
+from support_figures import SECTION_FIGURES, check_figure
 
-FIGURES = [f"b-fig-{n}" for n in range(9, 15)]
+FIGURES = SECTION_FIGURES["test_b_figures_s5"]
 CLAIMS = ["B-5.1-d"] + [f"B-5.2-{x}" for x in "abcdefghij"]
 PAPER_ONLY = {"B-5.2-b", "B-5.2-e", "B-5.2-h"}      # judged over 10⁵ revolutions only
 #: distinct cells of the six figures: plain DOPRI, the observer on (H, c²) (Figs 9-14), the penalty,
@@ -32,6 +33,7 @@ def figures(tmp_path_factory):
 
 @pytest.mark.parametrize("name", FIGURES)
 def test_figure_files_labels_and_data(figures, name):
+    check_figure(figures / name)
     fig_dir = figures / name / "figure"
     assert (fig_dir / f"{name}.png").stat().st_size > 10_000
     assert (fig_dir / f"{name}.svg").is_file()

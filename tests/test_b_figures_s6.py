@@ -8,8 +8,9 @@ import sys
 
 import pandas as pd
 import pytest
+from support_figures import SECTION_FIGURES, check_figure
 
-FIGURES = [f"b-fig-{n}" for n in range(15, 26)]
+FIGURES = SECTION_FIGURES["test_b_figures_s6"]
 #: claims and their outcomes at the quick scale (paper-only claims: skipped; the observer runs
 #: that stop near the equilibrium: not measured)
 QUICK = {"B-6.1-f": "partly", "B-6.2-a": "reproduced", "B-6.2-b": "skipped",
@@ -34,6 +35,7 @@ def reproduced(tmp_path_factory):
 
 @pytest.mark.parametrize("fid", FIGURES)
 def test_figure_files_labels_and_data(reproduced, fid):
+    check_figure(reproduced / fid)
     d = reproduced / fid / "figure"
     assert (d / f"{fid}.png").stat().st_size > 10_000
     assert (d / f"{fid}.svg").is_file()

@@ -12,10 +12,12 @@ from gnibench.suite.cli.main import main
 from gnibench.suite.foundation.errors import UserError
 from gnibench.suite.ledger.closed_forms_b7 import so4_growth, so4_overlap, so4_plateau
 from gnibench.suite.ledger.entries import load_ledger, missing_parts
+from support_figures import SECTION_FIGURES, check_figure
 
-FIGURES = {"b-fig-26": ("x₅", "x₆"), "b-fig-27": ("t", "|H3 − H3(x₀)|"),
+AXES = {"b-fig-26": ("x₅", "x₆"), "b-fig-27": ("t", "|H3 − H3(x₀)|"),
            "b-fig-28": ("t", "|H1 − H1(x₀)|"), "b-fig-29": ("t", "|H2 − H2(x₀)|"),
            "b-fig-30": ("t", "|Hi − Hi(x₀)|"), "b-fig-31": ("q₁", "q₂"), "b-fig-32": ("t", "|H − H0|")}
+FIGURES = SECTION_FIGURES["test_b_figures_s78"]
 CLAIMS = ["B-7.2-a", "B-7.2-b", "B-7.2-c", "B-7.2-d", "B-7.2-e", "B-7.2-f", "B-7.2-g", "B-7.2-h",
           "B-8.2-a", "B-X-a", "B-X-b"]
 #: parts of B-X-* in sections other helpers write (CLAIMS.md ids); empty once merged
@@ -34,12 +36,13 @@ def _manifest(root, name):
 
 @pytest.mark.parametrize("name", sorted(FIGURES))
 def test_figure_files_labels_and_data(figures, name):
+    check_figure(figures / name)
     fig = figures / name / "figure"
     assert (fig / f"{name}.png").stat().st_size > 10_000 and (fig / f"{name}.svg").is_file()
     m = _manifest(figures, name)
     assert m["number"] == f"Fig {name.split('-')[-1]}" and m["scale"] == "quick"
     for panel in m["panels"]:
-        assert (panel["xlabel"], panel["ylabel"]) == FIGURES[name]
+        assert (panel["xlabel"], panel["ylabel"]) == AXES[name]
         if panel["xlabel"] == "t":
             assert panel["yscale"] == "log"
         for curve in panel["curves"]:

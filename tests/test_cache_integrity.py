@@ -2,14 +2,16 @@
 never a traceback, never a silently wrong number (kernel modules, numba's compiled files,
 generated problem code, reference solutions).
 
-Each test runs ``gnibench solve`` in a fresh process on its own cache directory, damages the entry,
-runs again and compares the output with the first run's.
+Each test runs ``gnibench solve`` in a fresh process on its own cache directory (a copy of one
+warmed once per module, so that no test compiles from scratch; a damaged entry is then rebuilt by
+the test's own run), damages the entry, runs again and compares the output with the first run's.
 """
 from __future__ import annotations
 
 import json
 import os
 import re
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -19,6 +21,8 @@ import pytest
 
 GNIBENCH = [str(Path(sys.executable).with_name("gnibench"))]
 SOLVE = ["solve", "kepler-2d", "rk4:h=0.01", "--steps", "300", "--every", "100"]
+HEYOKA = ["solve", "lotka-volterra", "rk4:h=0.05", "--steps", "40", "--every", "10",
+          "--reference", "heyoka"]
 
 
 def _solve(cache: Path, args=SOLVE, **env) -> subprocess.CompletedProcess:
@@ -27,12 +31,30 @@ def _solve(cache: Path, args=SOLVE, **env) -> subprocess.CompletedProcess:
                           env=env)
 
 
+@pytest.fixture(scope="module")
+def warmed(tmp_path_factory):
+    """Cache directories warmed once per module, each by one run (of SOLVE, of HEYOKA with its
+    reference solution); the runs' outputs."""
+    root = tmp_path_factory.mktemp("warmed")
+    runs = {}
+    for name, args in (("plain", SOLVE), ("heyoka", HEYOKA)):
+        first = _solve(root / name, args)
+        assert first.returncode == 0 and first.stderr == "", first.stderr
+        runs[name] = (root / name, first.stdout)
+    return runs
+
+
+def _copy(warmed, name: str, tmp_path: Path) -> tuple[Path, str]:
+    source, output = warmed[name]
+    copy = tmp_path / "cache"
+    shutil.copytree(source, copy, symlinks=True)      # copy2: numba's index checks the mtimes
+    return copy, output
+
+
 @pytest.fixture
-def warm(tmp_path):
-    """A cache directory warmed by one run; the run's output."""
-    first = _solve(tmp_path)
-    assert first.returncode == 0 and first.stderr == "", first.stderr
-    return tmp_path, first.stdout
+def warm(warmed, tmp_path):
+    """A cache directory warmed by one run (a copy); the run's output."""
+    return _copy(warmed, "plain", tmp_path)
 
 
 def _check_rebuilt(cache: Path, expected: str, what: str, args=SOLVE, **env) -> None:
@@ -89,29 +111,24 @@ def test_truncated_problem_code_is_regenerated(warm):
     _check_rebuilt(cache, expected, "problem code")
 
 
-HEYOKA = ["solve", "lotka-volterra", "rk4:h=0.05", "--steps", "40", "--every", "10",
-          "--reference", "heyoka"]
-
-
-def test_rewritten_reference_is_recomputed(tmp_path):
+def test_rewritten_reference_is_recomputed(warmed, tmp_path):
     """A reference .npz rewritten with y * 1.001 (a valid file) must not give a wrong
     global_error: its checksum no longer matches."""
-    first = _solve(tmp_path, HEYOKA)
-    assert first.returncode == 0, first.stderr
-    path = next((tmp_path / "references").glob("lotka-volterra-heyoka-*.npz"))
+    cache, expected = _copy(warmed, "heyoka", tmp_path)
+    path = next((cache / "references").glob("lotka-volterra-heyoka-*.npz"))
     with np.load(path) as z:
         arrays = {k: z[k] for k in z.files}
     arrays["y"] = arrays["y"] * 1.001
     with open(path, "wb") as f:
         np.savez(f, **arrays)
-    _check_rebuilt(tmp_path, first.stdout, "reference solution", HEYOKA)
+    _check_rebuilt(cache, expected, "reference solution", HEYOKA)
 
 
-def test_truncated_reference_is_recomputed(tmp_path):
-    first = _solve(tmp_path, HEYOKA)
-    path = next((tmp_path / "references").glob("lotka-volterra-heyoka-*.npz"))
+def test_truncated_reference_is_recomputed(warmed, tmp_path):
+    cache, expected = _copy(warmed, "heyoka", tmp_path)
+    path = next((cache / "references").glob("lotka-volterra-heyoka-*.npz"))
     path.write_bytes(path.read_bytes()[:64])
-    _check_rebuilt(tmp_path, first.stdout, "reference solution", HEYOKA)
+    _check_rebuilt(cache, expected, "reference solution", HEYOKA)
 
 
 def test_manifest_lists_every_compiled_file(warm):

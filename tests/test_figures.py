@@ -1,20 +1,22 @@
-"""Every shipped figure of the seeds, reproduced at the quick scale (registry-parametrized).
+"""Every shipped figure of the seeds (registry-parametrized), and the drawing helpers.
 
-For each figure experiment (``gnibench reproduce --list``): the cells run through the runner into
-a results directory, the figure is drawn, and the manifest read back from matplotlib must show the
-axis labels, scales and titles declared in the experiment's ``[figure]`` section, every declared
-curve with data (points > 0, no cell missing), every panel with something drawn, and the PNG and
-SVG files. Table figures must have every row's fitted entries. Paper scale: ``pytest -m slow``.
+At the quick scale each figure is reproduced and checked once per test run, by the test file of
+its section (tests/support_figures.py: ``SECTION_FIGURES``, ``check_figure``: the cells run
+through the runner into a results store, the figure is drawn, and the manifest read back from
+matplotlib must show the axis labels, scales and titles declared in the experiment's ``[figure]``
+section, every declared curve with data, every panel with something drawn, and the PNG and SVG
+files); here every figure of the registry must have exactly one such file. Paper scale:
+``pytest -m slow``.
 """
 from __future__ import annotations
 
-import json
 import math
 import os
 
 import numpy as np
 import pytest
 from gnibench.suite.runs.reproduce import figures, load_figures, run_figures
+from support_figures import SECTION_FIGURES, check_figure
 
 IDS = list(figures())
 
@@ -24,48 +26,26 @@ def _reproduce(fid: str, scale: str, out):
 
     (experiment,) = load_figures([fid], scale)
     (results,) = run_figures([experiment], out, jobs=1, log=open(os.devnull, "w"))  # noqa: SIM115
-    return experiment, draw_figure(results), results
-
-
-def _check(experiment, manifest, results):
-    declared = experiment.figure
-    assert manifest["id"] == experiment.name and manifest["number"] == declared["number"]
-    for f in manifest["files"]:
-        if f.endswith((".png", ".svg")):
-            assert (results / "figure" / f).stat().st_size > 1000, f
-    assert {f.rsplit(".", 1)[-1] for f in manifest["files"]} >= {"png", "svg"}
-    if declared["kind"] == "table":
-        table = manifest["panels"][0]["table"]
-        assert len(table["rows"]) >= len(declared["table"]["rows"])
-        for row in table["rows"]:
-            for entry in row["measured"]:
-                assert entry["zero"] or math.isfinite(entry["growth_exponent"]), (row["label"], entry)
-        return
-    assert len(manifest["panels"]) == len(declared["panels"])
-    for drawn, panel in zip(manifest["panels"], declared["panels"]):
-        where = f"{experiment.name} panel {panel['title']!r}"
-        assert (drawn["xlabel"], drawn["ylabel"]) == (panel["xlabel"], panel["ylabel"]), where
-        assert (drawn["xscale"], drawn["yscale"]) == (panel["xscale"], panel["yscale"]), where
-        assert drawn["title"] == panel["title"], where
-        assert drawn["drawn"] > 0, f"{where}: nothing drawn"
-        for curve in drawn["curves"]:
-            assert curve["points"] > 0 and not curve["missing"], f"{where}: {curve['label']!r}"
-        for field in drawn["fields"]:
-            assert field["points"] > 0, f"{where}: empty field {field}"
+    draw_figure(results)
+    return results
 
 
 @pytest.mark.parametrize("fid", IDS)
-def test_figure_at_quick_scale(fid, tmp_path):
-    experiment, manifest, results = _reproduce(fid, "quick", tmp_path)
-    _check(experiment, manifest, results)
-    assert json.loads((results / "figure" / "figure.json").read_text())["scale"] == "quick"
+def test_figure_is_reproduced_at_the_quick_scale_by_one_section_file(fid):
+    assert [f for f, ids in SECTION_FIGURES.items() if fid in ids] != [], \
+        f"{fid}: no test file reproduces it (tests/support_figures.py: SECTION_FIGURES)"
+    assert len([f for f, ids in SECTION_FIGURES.items() if fid in ids]) == 1, fid
+
+
+def test_section_files_list_only_shipped_figures():
+    listed = [fid for ids in SECTION_FIGURES.values() for fid in ids]
+    assert sorted(listed) == sorted(IDS)
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("fid", IDS)
 def test_figure_at_paper_scale(fid, tmp_path):
-    experiment, manifest, results = _reproduce(fid, "paper", tmp_path)
-    _check(experiment, manifest, results)
+    check_figure(_reproduce(fid, "paper", tmp_path), "paper")
 
 
 def test_pieces_break_a_line_at_its_jumps():

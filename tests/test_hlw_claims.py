@@ -16,9 +16,9 @@ from gnibench.suite.cli.main import main
 from gnibench.suite.ledger import closed_forms_hlw
 from gnibench.suite.ledger.entries import load_ledger
 from gnibench.suite.runs.experiment import shipped
+from support_figures import SECTION_FIGURES, check_figure
 
-FIGURES = ["hlw-fig-1.1", "hlw-fig-1.2", "hlw-fig-1.3", "hlw-fig-1.4", "hlw-fig-2.2", "hlw-fig-2.3",
-           "hlw-fig-2.4", "hlw-fig-3.1", "hlw-table-2.1"]
+FIGURES = SECTION_FIGURES["test_hlw_claims"]
 CLAIMS_MD = Path(__file__).resolve().parents[2] / "shared" / "CLAIMS.md"
 
 # a representative set: each way of checking, each experiment, the expected non-reproductions
@@ -37,6 +37,7 @@ def reproduced(tmp_path_factory):
 
 @pytest.mark.parametrize("figure", FIGURES)
 def test_figure_files_labels_and_data(reproduced, figure):
+    check_figure(reproduced / figure)
     manifest = json.loads((reproduced / figure / "figure" / "figure.json").read_text())
     assert manifest["complete"] and manifest["scale"] == "quick"
     for name in manifest["files"]:

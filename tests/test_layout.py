@@ -168,3 +168,12 @@ def test_only_gnibench_is_importable(tmp_path):
     proc = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, check=False,
                           text=True)
     assert proc.returncode == 0, proc.stderr + proc.stdout
+
+
+def test_the_test_modules_run_first_exist():
+    """tests/conftest.py names the costliest test modules (run first): each is a test module."""
+    from conftest import COSTLIEST_FIRST
+
+    assert len(set(COSTLIEST_FIRST)) == len(COSTLIEST_FIRST)
+    for name in COSTLIEST_FIRST:
+        assert (ROOT / "tests" / name).is_file(), name
