@@ -6,8 +6,14 @@ out the longest first (the "longest processing time first" rule) makes the worke
 by default pytest-xdist orders the modules by their number of tests, which put several of the
 longest, with few tests, last (one worker ran alone at the end). Without pytest-xdist the order
 only changes which module runs first.
+
+Since the order of the modules on a worker is not fixed, a module leaves the registries as it
+found them: the user definitions it loaded (``--load``, an experiment's ``load``, the API) are
+unloaded after it.
 """
 from __future__ import annotations
+
+import pytest
 
 #: the costliest modules, longest first: their summed test durations (s) in a cold run (empty
 #: kernel cache) on 2 cores, 2026-11-27; the modules not listed follow in collection order
@@ -42,3 +48,16 @@ def pytest_collection_modifyitems(session, config, items):
     """A stable sort by the module's rank: each module's tests stay together and in order."""
     rank = {name: k for k, name in enumerate(COSTLIEST_FIRST)}
     items.sort(key=lambda item: rank.get(item.path.name, len(rank)))
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _registries_as_found():
+    """After a module: the definitions files and entry points it loaded are unloaded, and
+    discovery (``GNIBENCH_LOAD``, entry points) is as it was before it."""
+    from gnibench.suite.cell.user import loader
+
+    before, discovered = set(loader.loaded()), loader._discovered
+    yield
+    for name in set(loader.loaded()) - before:
+        loader.unload(name)
+    loader._discovered = discovered
