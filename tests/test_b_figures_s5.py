@@ -3,8 +3,6 @@ one run for the figures that share cells) and the verdicts of the claims B-5.1-d
 from __future__ import annotations
 
 import json
-import tomllib
-from importlib import resources
 
 import pytest
 from gnibench.suite.cli.main import main
@@ -19,11 +17,6 @@ PAPER_ONLY = {"B-5.2-b", "B-5.2-e", "B-5.2-h"}      # judged over 10⁵ revoluti
 DISTINCT_CELLS = 6
 
 
-def _spec(name: str) -> dict:
-    root = resources.files("gnibench.suite") / "experiments"
-    return tomllib.loads((root / f"{name}.toml").read_text(encoding="utf-8"))
-
-
 @pytest.fixture(scope="session")    # once per worker (pyproject: --dist loadscope, one worker)
 def figures(tmp_path_factory):
     out = tmp_path_factory.mktemp("s5")
@@ -33,18 +26,11 @@ def figures(tmp_path_factory):
 
 @pytest.mark.parametrize("name", FIGURES)
 def test_figure_files_labels_and_data(figures, name):
-    check_figure(figures / name)
-    fig_dir = figures / name / "figure"
-    assert (fig_dir / f"{name}.png").stat().st_size > 10_000
-    assert (fig_dir / f"{name}.svg").is_file()
-    drawn = json.loads((fig_dir / "figure.json").read_text())
-    declared = _spec(name)["figure"]
-    assert drawn["number"] == declared["number"] and drawn["scale"] == "quick"
+    drawn = check_figure(figures / name)               # declared labels, curves, files
+    assert (figures / name / "figure" / f"{name}.png").stat().st_size > 10_000
     assert drawn["cells"]["statuses"] == {"ok": drawn["cells"]["total"]}
-    for got, want in zip(drawn["panels"], declared["panels"], strict=True):
-        assert (got["xlabel"], got["ylabel"]) == (want["xlabel"], want["ylabel"])
+    for got in drawn["panels"]:
         assert got["yscale"] == "log"                       # errors span decades
-        assert len(got["curves"]) == len(want["curves"])
         for curve in got["curves"]:
             # quick scale: 10³ revolutions sampled every 10 (+ t = 0, off the log axes)
             assert curve["points"] >= 90, (name, curve["label"])

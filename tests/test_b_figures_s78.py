@@ -36,11 +36,9 @@ def _manifest(root, name):
 
 @pytest.mark.parametrize("name", sorted(FIGURES))
 def test_figure_files_labels_and_data(figures, name):
-    check_figure(figures / name)
-    fig = figures / name / "figure"
-    assert (fig / f"{name}.png").stat().st_size > 10_000 and (fig / f"{name}.svg").is_file()
-    m = _manifest(figures, name)
-    assert m["number"] == f"Fig {name.split('-')[-1]}" and m["scale"] == "quick"
+    m = check_figure(figures / name)                   # declared labels, curves, files
+    assert (figures / name / "figure" / f"{name}.png").stat().st_size > 10_000
+    assert m["number"] == f"Fig {name.split('-')[-1]}"
     for panel in m["panels"]:
         assert (panel["xlabel"], panel["ylabel"]) == AXES[name]
         if panel["xlabel"] == "t":

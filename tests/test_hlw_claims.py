@@ -4,7 +4,6 @@ measurements of suite/ledger/closed_forms_hlw.py on synthetic data."""
 from __future__ import annotations
 
 import json
-import math
 import re
 import tomllib
 from pathlib import Path
@@ -37,29 +36,13 @@ def reproduced(tmp_path_factory):
 
 @pytest.mark.parametrize("figure", FIGURES)
 def test_figure_files_labels_and_data(reproduced, figure):
-    check_figure(reproduced / figure)
-    manifest = json.loads((reproduced / figure / "figure" / "figure.json").read_text())
-    assert manifest["complete"] and manifest["scale"] == "quick"
-    for name in manifest["files"]:
+    manifest = check_figure(reproduced / figure)       # declared labels, curves, files
+    for name in manifest["files"]:                     # table.md too
         assert (reproduced / figure / "figure" / name).stat().st_size > 0, name
     declared = tomllib.loads(shipped()[figure])["figure"]
-    assert manifest["number"] == declared["number"]
-    if declared.get("kind") == "table":
+    if declared.get("kind") == "table":               # the rows as declared, in their order
         rows = manifest["panels"][0]["table"]["rows"]
         assert [r["label"] for r in rows] == [r["label"] for r in declared["table"]["rows"]]
-        for row in rows:
-            for entry in row["measured"]:
-                assert entry["zero"] or math.isfinite(entry["growth_exponent"]), (row, entry)
-        return
-    assert len(manifest["panels"]) == len(declared["panels"])
-    for drawn, panel in zip(manifest["panels"], declared["panels"]):
-        for key in ("title", "xlabel", "ylabel"):
-            assert drawn[key] == panel.get(key, ""), (figure, key)
-        assert len(drawn["curves"]) == len(panel.get("curves", []))
-        for curve in drawn["curves"]:
-            assert curve["points"] > 0 and not curve["missing"], (figure, curve["label"])
-        for field in drawn.get("fields", []):
-            assert field["points"] > 0, (figure, field["label"])
 
 
 def test_table_2_1_reads_as_the_book_where_it_should(reproduced):

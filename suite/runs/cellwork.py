@@ -97,16 +97,12 @@ def with_frame(outcome: CellOutcome) -> CellOutcome:
     return outcome
 
 
-def kernel_group(cell) -> str:
-    """Cells with the same key run the same compiled kernel (the text of the generated module,
-    or the external engine): executors run the first cell of a group before the others, so a
-    kernel is compiled once and then loaded from the disk cache."""
-    return kernel_plan(cell)[0]
-
-
 def kernel_plan(cell) -> tuple[str, int]:
     """The cell's kernel group and a guess of the cost of compiling its kernel (0: in the disk
-    cache already; :func:`gnibench.suite.cell.compiled.kernel_plan`)."""
+    cache already; :func:`gnibench.suite.cell.compiled.kernel_plan`). Cells with the same key run
+    the same compiled kernel (the text of the generated module, or the external engine):
+    executors run the first cell of a group before the others, so a kernel is compiled once and
+    then loaded from the disk cache."""
     from gnibench.suite.cell.compiled import kernel_plan as plan
 
     return plan(cell.spec.problem, cell.spec.method)

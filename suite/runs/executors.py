@@ -1,7 +1,7 @@
 """Where the cells of a matrix run: this process, a local process pool, or a Dask cluster.
 
 Every executor takes the cells to compute, grouped by compiled kernel
-(:func:`gnibench.suite.runs.cellwork.kernel_group`), and yields their
+(:func:`gnibench.suite.runs.cellwork.kernel_plan`), and yields their
 :class:`~gnibench.suite.runs.cellwork.CellOutcome` as they finish, in any order (the tables are
 assembled in cell order afterwards, so they do not depend on the executor or the number of
 workers). The first cell of each group runs before the rest of its group: it compiles the kernel
