@@ -87,6 +87,11 @@ class Method(Registered):
     #: values; ``Context.extra["par_at"]`` gives where) instead of from its module's text: cells
     #: that differ only in them share one kernel (the iteration counts of a sweep)
     runtime: tuple[str, ...] = ()
+    #: numbers the compiled step reads from ``par`` after the runtime options
+    #: (``Context.extra["data_at"]`` gives where) instead of from its module's text: the methods
+    #: of a family that differ only in them share one kernel per problem (the compositions'
+    #: coefficients, methods/compositions.py)
+    runtime_data: tuple[float, ...] = ()
 
     def __post_init__(self):
         if self.kind not in KINDS:

@@ -18,11 +18,13 @@ first-order method Φ (symplectic Euler, ``pstep_u``) and its adjoint Φ* (``pst
 α_5 = (14 − √19)/108. A Störmer-Verlet composition is the special case α_i = β_i = γ_i / 2.
 
 Every stage reuses the partitioned kernels of methods/partitioned.py (explicit for separable
-problems, Newton otherwise). The orders are checked by measurement (tests/test_orders.py) and the
-consistency and symmetry conditions here. Under ``sum=compensated`` every stage's block updates
-add their increments with the carried rounding error (``partitioned.compose``,
-methods/summation.py). Adding a composition: its coefficients here and one line in
-:mod:`methods` (``summation="compensated"`` makes that its default).
+problems, Newton otherwise). The step reads the coefficients from ``par`` at run time
+(``Method.runtime_data``, ``partitioned.compose``), so all compositions of a problem share one
+compiled kernel. The orders are checked by measurement (tests/test_orders.py) and the
+consistency and symmetry conditions here. Under ``sum=compensated`` every stage's block
+updates add their increments with the carried rounding error (methods/summation.py). Adding a
+composition: its coefficients here and one line in :mod:`methods` (``summation="compensated"``
+makes that its default).
 """
 from __future__ import annotations
 
@@ -72,24 +74,28 @@ def substeps(data) -> tuple[tuple[float, float], ...]:
     return tuple(x if isinstance(x, tuple) else (0.5 * x, 0.5 * x) for x in data)
 
 
-def _generate(data):
-    def generate(ctx) -> str:
-        src_u, ws_u = _block(ctx, "u")
-        src_v, ws_v = _block(ctx, "v")
-        blocks = [(block, repr(c), w) for cu, cv in substeps(data)
-                  for block, w, c in (("u", 0, cu), ("v", 1, cv))]
-        return (src_u + src_v + f"\n@njit(cache=True)\ndef make_ws():\n    return ({ws_u}, {ws_v})\n"
-                + compose("step", blocks))
-    return generate
+def _generate(ctx) -> str:
+    """The step of every composition: its coefficients are read from ``par`` (``runtime_data``)."""
+    src_u, ws_u = _block(ctx, "u")
+    src_v, ws_v = _block(ctx, "v")
+    return (src_u + src_v + f"\n@njit(cache=True)\ndef make_ws():\n    return ({ws_u}, {ws_v})\n"
+            + compose(ctx.extra["data_at"]))
+
+
+def runtime_data(data) -> tuple[float, ...]:
+    """(s, u_1, v_1, …, u_s, v_s): the stage count and the coefficients of h of the two block
+    steps of each stage (:func:`substeps`), as the composed step reads them from ``par``."""
+    return (float(len(data)),) + tuple(c for stage in substeps(data) for c in stage)
 
 
 def composition(id, data, order, doc, reference="[B] §5; Yoshida (1990)", *, summation="plain"):
     """A composition with coefficients ``data`` (γ of Störmer-Verlet, or (α, β) pairs of
     symplectic Euler and its adjoint); ``summation``: the default of its option ``sum``."""
     return Method(id=id, family="composition", order=order, reference=reference,
-                  doc=doc, generate=_generate(data), params=(H_PARAM,) + NEWTON_PARAMS,
+                  doc=doc, generate=_generate, params=(H_PARAM,) + NEWTON_PARAMS,
                   symplectic=True, symmetric=True, needs=("partition",), implicit=True,
-                  explicit_when="separable", data=data, summation=summation)
+                  explicit_when="separable", data=data, summation=summation,
+                  runtime_data=runtime_data(data))
 
 
 yoshida4 = composition("yoshida4", YOSHIDA4, 4, "Yoshida's 4th-order triple jump of Störmer-Verlet")

@@ -135,12 +135,14 @@ def module_source(problem, method_cfg, keyed: bool = False) -> tuple[str, dict]:
     for m in mods:
         offsets.append(off)
         off += m.record.runtime_size(m.values)
-    # the method's runtime options follow the modifiers' values in par (suite/cell/compiled.py)
-    par_at = {name: off + i for i, name in enumerate(method_cfg.base.record.runtime)}
+    # the method's runtime options, then its runtime data, follow the modifiers' values in par
+    # (suite/cell/compiled.py)
+    runtime = method_cfg.base.record.runtime
+    par_at = {name: off + i for i, name in enumerate(runtime)}
     ctx = Context(n=meta["n"], meta=meta, values=method_cfg.base.values, modified=bool(fields),
                   explicit_u=meta["explicit_u"] and not fields,
                   explicit_v=meta["explicit_v"] and not fields, problem=problem.record,
-                  keyed=keyed, extra={"par_at": par_at})
+                  keyed=keyed, extra={"par_at": par_at, "data_at": off + len(runtime)})
     head = _header(meta["n"], method_cfg.base.values.get("newton_maxit", 50),
                    compensated(method_cfg.base.values))
     if problem.record.post_step is not None:

@@ -101,8 +101,9 @@ def _compile(problem: Bound, method) -> CompiledCell:
     for m in method.modifiers:
         idx = [pk.integral_names.index(x) for x in m.values["on"]]
         extra.extend(m.record.runtime(m.values, [h0_all[k] for k in idx]))
-    base = method.base      # then the method's runtime options (Method.runtime), in that order
+    base = method.base      # then the method's runtime options (Method.runtime), in that order,
     extra.extend(float(base.values[name]) for name in base.record.runtime)
+    extra.extend(float(x) for x in base.record.runtime_data)   # and its Method.runtime_data
     par = np.concatenate([pk.par, np.array(extra, dtype=np.float64)])
     return CompiledCell(kernel, pk.kernel, pk.integral_names, pk.par, par, y0, h0_all, 0.0)
 

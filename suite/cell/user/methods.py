@@ -314,6 +314,7 @@ def _composition(e: Entry, info: dict, known, definition: dict) -> Method:
         params=(H_PARAM,) + newton, needs=basis.needs, implicit=basis.implicit,
         explicit_when=basis.explicit_when, field_modifiers_refused=basis.field_modifiers_refused,
         data={"gamma": floats, "basis": basis_id, "forms": composed}, basis=basis,
+        runtime_data=basis.runtime_data,    # a shipped composition as basis reads its own from par
         **{**info, "symplectic": basis.symplectic, "symmetric": symmetric})
 
 
