@@ -59,31 +59,34 @@ def _block(ctx, which: str) -> tuple[str, str]:
     return src, f"make_ws_{which}()"
 
 
+def _compose_block(which: str, k: str, at: int, carry: bool, indent: str) -> list[str]:
+    """One block step of a composed stage, its coefficient of h read from ``par[at + k]``."""
+    call = (f"y, e, a, b, s = pstep_{which}_sum(y, e, " if carry
+            else f"y, a, b, s = pstep_{which}(y, ")
+    ret = "y, e, nf, nj, s" if carry else "y, nf, nj, s"
+    return [f"{indent}{call}par[{at} + {k}] * h, par, ws[{0 if which == 'u' else 1}])",
+            f"{indent}nf += a", f"{indent}nj += b", f"{indent}if s != STATUS_OK:",
+            f"{indent}    return {ret}"]
+
+
 def compose(at: int) -> str:
     """``step(y, h, par, ws)`` chaining s stages of the two block steps, Φ*_{b_s h} ∘ Φ_{a_s h} ∘ …
     ∘ Φ*_{b_1 h} ∘ Φ_{a_1 h}, with s = par[at] and (a_i, b_i) = (par[at + 2i - 1], par[at + 2i])
     read at run time (``Method.runtime_data``): every composition of a problem shares this one
     kernel. The loop runs from the middle of one stage to the middle of the next (Φ* of stage i,
-    then Φ of stage i + 1), so that LLVM sees the two evaluations of f on either side of a stage
-    boundary together, as in the stages written out (measured: yoshida4 on kepler-2d 5 % slower
-    when the loop ran over whole stages). For ``sum=compensated``, ``step_sum(y, e, h, par, ws)``
-    carries e through every block."""
+    then Φ of stage i + 1), so that LLVM sees the two block steps on either side of a stage
+    boundary together, as in the stages written out (measured, yoshida4 on kepler-2d: 3 % slower
+    than written out, 5 % with a loop over whole stages; the longer compositions as fast). For
+    ``sum=compensated``, ``step_sum(y, e, h, par, ws)`` carries e through every block."""
     out = []
     for name, carry in (("step", False), ("step_sum", True)):
-        ret = "y, e, nf, nj, s" if carry else "y, nf, nj, s"
-
-        def block(which: str, k: str, indent: str) -> list[str]:
-            call = (f"y, e, a, b, s = pstep_{which}_sum(y, e, " if carry
-                    else f"y, a, b, s = pstep_{which}(y, ")
-            w = 0 if which == "u" else 1
-            return [f"{indent}{call}par[{at} + {k}] * h, par, ws[{w}])", f"{indent}nf += a",
-                    f"{indent}nj += b", f"{indent}if s != STATUS_OK:", f"{indent}    return {ret}"]
         out += [f"\n@njit(cache=True)\ndef {name}(y, {'e, ' if carry else ''}h, par, ws):",
                 "    nf = 0.0", "    nj = 0.0", f"    stages = int(par[{at}])"]
-        out += block("u", "1", "    ")
+        out += _compose_block("u", "1", at, carry, "    ")
         out.append("    for i in range(1, stages):")
-        out += block("v", "2 * i", "        ") + block("u", "2 * i + 1", "        ")
-        out += block("v", "2 * stages", "    ")
+        out += (_compose_block("v", "2 * i", at, carry, "        ")
+                + _compose_block("u", "2 * i + 1", at, carry, "        "))
+        out += _compose_block("v", "2 * stages", at, carry, "    ")
         out.append(f"    return y, {'e, ' if carry else ''}nf, nj, STATUS_OK")
     return "\n".join(out) + "\n"
 
