@@ -74,8 +74,10 @@ def substeps(data) -> tuple[tuple[float, float], ...]:
     return tuple(x if isinstance(x, tuple) else (0.5 * x, 0.5 * x) for x in data)
 
 
-def _generate(ctx) -> str:
-    """The step of every composition: its coefficients are read from ``par`` (``runtime_data``)."""
+def composed_step(ctx) -> str:
+    """The step of every composition of Störmer-Verlet or of symplectic Euler and its adjoint (a
+    user's too, suite/cell/user/methods.py): its coefficients are read from ``par``
+    (``runtime_data``)."""
     src_u, ws_u = _block(ctx, "u")
     src_v, ws_v = _block(ctx, "v")
     return (src_u + src_v + f"\n@njit(cache=True)\ndef make_ws():\n    return ({ws_u}, {ws_v})\n"
@@ -92,7 +94,7 @@ def composition(id, data, order, doc, reference="[B] §5; Yoshida (1990)", *, su
     """A composition with coefficients ``data`` (γ of Störmer-Verlet, or (α, β) pairs of
     symplectic Euler and its adjoint); ``summation``: the default of its option ``sum``."""
     return Method(id=id, family="composition", order=order, reference=reference,
-                  doc=doc, generate=_generate, params=(H_PARAM,) + NEWTON_PARAMS,
+                  doc=doc, generate=composed_step, params=(H_PARAM,) + NEWTON_PARAMS,
                   symplectic=True, symmetric=True, needs=("partition",), implicit=True,
                   explicit_when="separable", data=data, summation=summation,
                   runtime_data=runtime_data(data))

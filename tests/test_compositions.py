@@ -117,3 +117,25 @@ def test_a_user_composition_of_a_composition_reads_its_basis_data(tmp_path):
     two = solve("kepler-2d", "yoshida4:h=0.05", steps=6)
     assert one.status == two.status == "ok"
     assert [float(x).hex() for x in one.y[-1]] == [float(x).hex() for x in two.y[-1]]
+
+
+def test_a_user_composition_of_stormer_verlet_is_the_shipped_kernel(tmp_path):
+    """A user's composition of Störmer-Verlet runs the shipped compositions' kernel (its γ in
+    par): the same kernel key as yoshida4's, and γ = (1/2, 1/2) is two Störmer-Verlet steps of
+    h/2, bit for bit."""
+    import gnibench
+    from gnibench.suite.cell.compiled import kernel_key
+    from gnibench.suite.cell.solve import solve
+    from gnibench.suite.cell.spec import prepare
+
+    path = tmp_path / "sv.toml"
+    path.write_text('[[method]]\nid = "sv-halves"\nkind = "composition"\norder = 2\n'
+                    'basis = "stormer-verlet"\ngamma = ["1/2", "1/2"]\n')
+    gnibench.load(path)
+    assert kernel_key(*prepare("kepler-2d", "sv-halves:h=0.1")) == \
+        kernel_key(*prepare("kepler-2d", "yoshida4:h=0.1,sum=plain"))
+    one = solve("kepler-2d", "sv-halves:h=0.1", steps=3)
+    two = solve("kepler-2d", "stormer-verlet:h=0.05", steps=6)
+    assert one.status == two.status == "ok"
+    assert [float(x).hex() for x in one.y[-1]] == [float(x).hex() for x in two.y[-1]]
+    assert one.nfev[-1] == two.nfev[-1]

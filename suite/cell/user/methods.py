@@ -259,7 +259,8 @@ def forms_of(method: Method):
 
 def _composition(e: Entry, info: dict, known, definition: dict) -> Method:
     import sympy as sp
-    from gnibench.methods import prk_conditions
+    from gnibench.methods import METHODS, prk_conditions
+    from gnibench.methods.compositions import composed_step, runtime_data
     from gnibench.methods.prk import PRK_FORMS, CompositionMethod, compose, generate_composition
 
     basis_id = e.text("basis")
@@ -309,12 +310,15 @@ def _composition(e: Entry, info: dict, known, definition: dict) -> Method:
         definition["basis"] = json.loads(basis.definition)
     newton = tuple(x for x in basis.params if x.name == "newton_maxit")
     floats = tuple(float(x.evalf(30)) for x in gammas)
+    generate, data = generate_composition(basis, floats), basis.runtime_data
+    if basis is METHODS.get("stormer-verlet"):    # the shipped compositions' kernel, γ in par
+        generate, data = composed_step, runtime_data(floats)
     return CompositionMethod(
-        family="composition", generate=generate_composition(basis, floats),
+        family="composition", generate=generate,
         params=(H_PARAM,) + newton, needs=basis.needs, implicit=basis.implicit,
         explicit_when=basis.explicit_when, field_modifiers_refused=basis.field_modifiers_refused,
         data={"gamma": floats, "basis": basis_id, "forms": composed}, basis=basis,
-        runtime_data=basis.runtime_data,    # a shipped composition as basis reads its own from par
+        runtime_data=data,          # (a shipped composition as basis reads its own from par)
         **{**info, "symplectic": basis.symplectic, "symmetric": symmetric})
 
 
