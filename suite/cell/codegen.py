@@ -251,12 +251,20 @@ def _module_path(key: str, prefix: str) -> Path:
 
 def compiled_before(text: str, prefix: str = "cell") -> bool:
     """Whether the module of this text is in the kernel cache with numba's files beside it (a
-    guess for scheduling, not a check: :func:`_import` verifies what it loads)."""
+    guess for scheduling, not a check: :func:`_import` verifies what it loads). A module found
+    once is not looked for again in this process: the look is a listing of numba's cache
+    directory, and a runner asks it for every cell it plans."""
     key = _module_key(text, prefix)
-    if key in _loaded:
+    if key in _loaded or key in _found:
         return True
     path = _module_path(key, prefix)
-    return path.exists() and any(numba_cache_path(path).glob(f"{path.stem}.*.nbi"))
+    if path.exists() and any(numba_cache_path(path).glob(f"{path.stem}.*.nbi")):
+        _found.add(key)
+        return True
+    return False
+
+
+_found: set[str] = set()
 
 
 @functools.cache

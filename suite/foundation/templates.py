@@ -43,8 +43,16 @@ def template(func, rename: dict[str, str] | None = None, inline: bool = False) -
     of a driver loop (a controller's update, a sample's row, Newton's parts), whose separate
     compilation would cost more than their code. It must then have one ``return``, its last
     statement."""
+    return _template(func, tuple((rename or {}).items()), inline)
+
+
+@functools.cache
+def _template(func, rename: tuple[tuple[str, str], ...], inline: bool) -> str:
+    """:func:`template`, made once per process for each function, renaming and marking (a cell's
+    module text is rebuilt for every cell a runner plans, e.g. the 192 initial values of [HLW]
+    Fig 1.1: the renames were three quarters of it)."""
     src = _source(func)
-    for old, new in (rename or {}).items():
+    for old, new in rename:
         src = re.sub(rf"\b{re.escape(old)}\b", new, src)
     return ("\n@njit(cache=True, inline='always')\n" if inline else "\n@njit(cache=True)\n") + src
 
