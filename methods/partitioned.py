@@ -73,11 +73,12 @@ def compose(at: int) -> str:
     """``step(y, h, par, ws)`` chaining s stages of the two block steps, Φ*_{b_s h} ∘ Φ_{a_s h} ∘ …
     ∘ Φ*_{b_1 h} ∘ Φ_{a_1 h}, with s = par[at] and (a_i, b_i) = (par[at + 2i - 1], par[at + 2i])
     read at run time (``Method.runtime_data``): every composition of a problem shares this one
-    kernel. The loop runs from the middle of one stage to the middle of the next (Φ* of stage i,
-    then Φ of stage i + 1), so that LLVM sees the two block steps on either side of a stage
-    boundary together, as in the stages written out (measured, yoshida4 on kepler-2d: 3 % slower
-    than written out, 5 % with a loop over whole stages; the longer compositions as fast). For
-    ``sum=compensated``, ``step_sum(y, e, h, par, ws)`` carries e through every block."""
+    kernel; one stage with a = b = 1/2 is Störmer-Verlet, [HLW] (1.17). The loop runs from the
+    middle of one stage to the middle of the next (Φ* of stage i, then Φ of stage i + 1), so that
+    LLVM sees the two block steps on either side of a stage boundary together, as in the stages
+    written out (measured, yoshida4 on kepler-2d: 3 % slower than written out, 5 % with a loop
+    over whole stages; the longer compositions as fast). For ``sum=compensated``,
+    ``step_sum(y, e, h, par, ws)`` carries e through every block."""
     out = []
     for name, carry in (("step", False), ("step_sum", True)):
         out += [f"\n@njit(cache=True)\ndef {name}(y, {'e, ' if carry else ''}h, par, ws):",

@@ -249,6 +249,9 @@ def _module_path(key: str, prefix: str) -> Path:
     return cache_dir("kernels") / f"{prefix}_{key}.py"
 
 
+_found: set[str] = set()          # the modules compiled_before found in the kernel cache
+
+
 def compiled_before(text: str, prefix: str = "cell") -> bool:
     """Whether the module of this text is in the kernel cache with numba's files beside it (a
     guess for scheduling, not a check: :func:`_import` verifies what it loads). A module found
@@ -262,9 +265,6 @@ def compiled_before(text: str, prefix: str = "cell") -> bool:
         _found.add(key)
         return True
     return False
-
-
-_found: set[str] = set()
 
 
 @functools.cache
