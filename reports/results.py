@@ -189,8 +189,10 @@ def load_manifest(figure_dir: Path) -> dict:
         if not isinstance(p, dict):
             raise TypeError("a panel must be an object")
         curves = [c.get("label", "") if isinstance(c, dict) else str(c) for c in p.get("curves", [])]
-        panels.append({k: str(p.get(k, "") or "") for k in ("id", "title", "xlabel", "ylabel")}
-                      | {"curves": [str(c) for c in curves]})
+        # the pages do not render mathtext: its labels as plain Unicode there
+        panels.append({k: plain_math(str(p.get(k, "") or "")) for k in ("id", "title", "xlabel",
+                                                                          "ylabel")}
+                      | {"curves": [plain_math(str(c)) for c in curves]})
     text = {k: "" if doc.get(k) is None else str(doc.get(k))
             for k in ("id", "number", "caption", "reference", "scale")}
     notes = _strings(doc.get("notes"), "notes") + _strings(doc.get("note") or None, "note")
@@ -205,3 +207,32 @@ def slug(text: str) -> str:
     """A file-name-safe form of a name (letters, digits, . _ -)."""
     s = _SLUG.sub("_", str(text)).strip("._") or "x"
     return s[:60]
+
+
+#: mathtext commands of the seeds' labels, as Unicode
+_SYMBOLS = {"mu": "μ", "varphi": "φ", "phi": "ϕ", "Phi": "Φ", "theta": "θ", "alpha": "α",
+            "beta": "β", "gamma": "γ", "omega": "ω", "Omega": "Ω", "lambda": "λ", "sigma": "σ",
+            "tau": "τ", "epsilon": "ε", "pi": "π", "Delta": "Δ", "delta": "δ", "times": "×"}
+_SCRIPTS = {"^": str.maketrans("0123456789-+n", "⁰¹²³⁴⁵⁶⁷⁸⁹⁻⁺ⁿ"),
+            "_": str.maketrans("0123456789-+nthkie", "₀₁₂₃₄₅₆₇₈₉₋₊ₙₜₕₖᵢₑ")}
+_INLINE_MATH = re.compile(r"\$([^$]*)\$")
+
+
+def plain_math(text: str) -> str:
+    """A label with mathtext (``fit $t^{0.24}$``, ``$\\Phi_h^2(A)$``) as plain Unicode for the
+    HTML and Markdown pages, which do not render TeX: symbols as letters (Φ), a super- or
+    subscript as its Unicode character where every one of its characters has one (Φₕ²),
+    else written ``^0.24``; the dollars and braces dropped. Text without ``$`` is unchanged."""
+    def script(m: re.Match) -> str:
+        mark, body = (m.group(1), m.group(2)) if m.group(1) else (m.group(3), m.group(4))
+        table = _SCRIPTS[mark]
+        return body.translate(table) if all(c in table for c in map(ord, body)) else mark + body
+
+    def plain(m: re.Match) -> str:
+        s = re.sub(r"\\mathdefault\{([^{}]*)\}", r"\1", m.group(1))
+        s = s.replace("\\,", "\u2009").replace("\\ ", " ")
+        s = re.sub(r"\\([A-Za-z]+)", lambda g: _SYMBOLS.get(g.group(1), g.group(1)), s)
+        s = re.sub(r"([\^_])\{([^{}]*)\}|([\^_])(.)", script, s)
+        return s.replace("{", "").replace("}", "")
+
+    return _INLINE_MATH.sub(plain, text)

@@ -148,6 +148,26 @@ def test_manifest_refuses_files_outside(tmp_path):
     assert load_manifest(fig)["images"] == ["a.png"] and load_manifest(fig)["notes"] == ["n"]
 
 
+@pytest.mark.parametrize("label, want", [
+    ("fit $t^{0.24}$", "fit t^0.24"),                       # [B] Fig 10's legend
+    (r"$\mu = p_\varphi = 1$", "μ = p_φ = 1"),
+    ("$|y_n - y(t_n)|$", "|yₙ - y(tₙ)|"),
+    (r"$A,\ \Phi_h(A),\ \Phi_h^2(A)$", "A, Φₕ(A), Φₕ²(A)"),   # [HLW] Fig 1.1
+    (r"$\varphi_{2t}(A)$", "φ₂ₜ(A)"),
+    ("no math: t^2 {kept}", "no math: t^2 {kept}"),
+])
+def test_the_pages_show_mathtext_labels_as_plain_text(tmp_path, label, want):
+    """The HTML and Markdown pages do not render TeX: a panel's title, axis labels and curve
+    labels in mathtext (drawn by matplotlib in the PNG) are written as Unicode there."""
+    fig = tmp_path / "figure"
+    fig.mkdir()
+    (fig / "a.png").write_bytes(png_bytes())
+    (fig / "figure.json").write_text(json.dumps({"caption": "c", "files": ["a.png"], "panels": [
+        {"id": "p", "title": label, "xlabel": "t", "ylabel": label, "curves": [{"label": label}]}]}))
+    panel = load_manifest(fig)["panels"][0]
+    assert panel["title"] == panel["ylabel"] == want and panel["curves"] == [want]
+
+
 def test_bad_manifest_is_reported_on_the_page(results, tmp_path):
     import shutil
 
