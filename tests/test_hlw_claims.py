@@ -104,6 +104,24 @@ def test_asymmetry_sees_a_sheared_orbit_and_not_a_symmetric_one():
     assert closed_forms_hlw._asymmetry(t, 2 + 0.1 * np.cos(t)) < 1e-2
 
 
+@pytest.mark.parametrize("seed", range(4))
+def test_asymmetry_is_the_brute_force_value(seed):
+    """The bounded tree search gives the exact largest nearest distance: the same float as all
+    pairwise distances (orbit points and their images at q ± 2π), on sheared and noisy orbits
+    whose worst point is not among the every-64th first guesses."""
+    rng = np.random.default_rng(seed)
+    s = np.sort(rng.uniform(0, 12 * np.pi, 1500))
+    q = 2.5 * np.cos(s) + rng.normal(0, 0.05, s.size) + (0.4 * np.sin(s) if seed % 2 else 0.0)
+    p = 1.5 * np.sin(s) + rng.normal(0, 0.05, s.size)
+    q[rng.integers(s.size)] += 0.7                       # one point well off the others
+    qq = np.mod(q + np.pi, 2 * np.pi) - np.pi
+    pts = np.column_stack([qq, p])
+    images = np.vstack([pts, pts + [2 * np.pi, 0], pts - [2 * np.pi, 0]])
+    mirror = np.column_stack([-qq, p])
+    brute = np.sqrt(((mirror[:, None, :] - images[None, :, :]) ** 2).sum(-1)).min(1).max()
+    assert closed_forms_hlw._asymmetry(q, p) == brute
+
+
 def test_lv_stages_on_a_periodic_curve():
     """A synthetic cycle whose prey v peaks a quarter period before the predator u; the reversed
     cycle (u three quarters after v) has its maxima in the other order."""
