@@ -295,9 +295,18 @@ def test_disk_full_while_writing_is_one_line_and_leaves_nothing(tmp_path, capsys
         Path(path).write_bytes(b"PAR1 half")
         raise OSError(errno.ENOSPC, "No space left on device")
 
-    monkeypatch.setattr(pd.DataFrame, "to_csv", full)
-    code, _, err = run(SOLVE + ["-o", str(tmp_path / "x.csv")], capsys)
-    assert "No space left on device" in one_error_line(code, err, status=1)
+    real_write_text = Path.write_text
+
+    def full_text(self, text, *a, **k):       # csv and json are written from the columns
+        if Path(self).parent != tmp_path:
+            return real_write_text(self, text, *a, **k)
+        real_write_text(self, text[:9], *a, **k)
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(Path, "write_text", full_text)
+    for fmt in ("csv", "json"):
+        code, _, err = run(SOLVE + ["--format", fmt, "-o", str(tmp_path / f"x.{fmt}")], capsys)
+        assert "No space left on device" in one_error_line(code, err, status=1)
     import pyarrow.parquet as pq
 
     monkeypatch.setattr(pq, "write_table", lambda table, path, **k: full(None, path))

@@ -181,7 +181,7 @@ def _solve(a) -> int:
     from gnibench.suite.cli import streams
     from gnibench.suite.runs.progress import SolveProgress
     from gnibench.suite.runs.solving import solve_cell_spec, solve_output
-    from gnibench.suite.runs.storage import write_frame
+    from gnibench.suite.runs.storage import write_columns
 
     if a.format == "parquet" and a.output is None:
         raise UserError("--format parquet needs -o FILE (binary output is not written to stdout)")
@@ -199,7 +199,7 @@ def _solve(a) -> int:
     finally:
         progress.close()
     try:
-        write_frame(out.frame, out.meta, a.format, a.output, sys.stdout)
+        write_columns(out.columns, out.meta, a.format, a.output, sys.stdout)
     except OSError as e:                  # e.g. the disk filled up: nothing is left half-written
         raise fault(e, f"writing {a.output or 'stdout'}", "run the same command again once "
                     "there is room") from None

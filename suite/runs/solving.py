@@ -3,9 +3,9 @@
 :func:`solve_cell_spec` checks the options and makes the typed cell (before any work: the command
 line starts its progress display after it), :func:`solve_output` solves the cell, applies its
 metrics and builds the table
-(:func:`gnibench.suite.runs.tables.sample_frame`) and its metadata
+(:func:`gnibench.suite.runs.tables.sample_columns`) and its metadata
 (:func:`gnibench.suite.runs.storage.provenance`). The command line writes both
-(:func:`gnibench.suite.runs.storage.write_frame`); the Python API returns them as a DataFrame and
+(:func:`gnibench.suite.runs.storage.write_columns`); the Python API returns them as a DataFrame and
 the JSON metadata as a dict (:func:`json_meta`), so the two cannot drift apart.
 """
 from __future__ import annotations
@@ -19,17 +19,26 @@ from gnibench.suite.foundation.errors import UserError
 @dataclass
 class SolveOutput:
     """A solved cell: its trajectory (:class:`gnibench.suite.cell.trajectory.Trajectory`),
-    metric outputs, chosen metrics that did not apply (id -> why), table, metadata, the
-    Ctrl-C that stopped it (None if it ran to its end) and the typed cell
-    (:class:`gnibench.suite.cell.cellspec.CellSpec`)."""
+    metric outputs, chosen metrics that did not apply (id -> why), table as columns (name ->
+    array, :func:`gnibench.suite.runs.tables.sample_columns`), metadata, the Ctrl-C that
+    stopped it (None if it ran to its end) and the typed cell
+    (:class:`gnibench.suite.cell.cellspec.CellSpec`). ``frame`` is the table as a DataFrame,
+    made when asked: ``gnibench solve`` writes csv and json from the columns without importing
+    pandas (:func:`gnibench.suite.runs.storage.write_columns`)."""
 
     traj: object
     metrics: object
     skipped: dict
-    frame: object
+    columns: dict
     meta: dict
     interrupted: BaseException | None = None
     cell: object = None
+
+    @property
+    def frame(self):
+        from gnibench.suite.runs.tables import frame_of
+
+        return frame_of(self.columns)
 
 
 def check_options(every: int, section, reference, dt_out) -> None:
@@ -66,7 +75,7 @@ def solve_output(cell, progress=None) -> SolveOutput:
     from gnibench.suite.cell.solve import solve_cell
     from gnibench.suite.metrics.compute import apply
     from gnibench.suite.runs.storage import provenance
-    from gnibench.suite.runs.tables import sample_frame
+    from gnibench.suite.runs.tables import sample_columns
 
     interrupted = None
     try:
@@ -74,7 +83,7 @@ def solve_output(cell, progress=None) -> SolveOutput:
     except Interrupted as e:                  # keep what was computed
         traj, interrupted = e.partial, e
     out, skipped = apply(traj, cell.metrics, problem=cell.problem)
-    return SolveOutput(traj, out, skipped, sample_frame(traj, out), provenance(traj, out),
+    return SolveOutput(traj, out, skipped, sample_columns(traj, out), provenance(traj, out),
                        interrupted, cell)
 
 

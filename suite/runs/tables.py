@@ -22,9 +22,14 @@ STATUSES = TABLE_STATUSES
 
 def sample_frame(traj, metrics) -> pd.DataFrame:
     """The table of one cell (see :func:`sample_columns`)."""
+    return frame_of(sample_columns(traj, metrics))
+
+
+def frame_of(columns: dict[str, np.ndarray]) -> pd.DataFrame:
+    """The DataFrame of a cell's columns (:func:`sample_columns`)."""
     import pandas as pd
 
-    return missing_steps(pd.DataFrame(sample_columns(traj, metrics)))
+    return missing_steps(pd.DataFrame(columns))
 
 
 def missing_steps(df: pd.DataFrame) -> pd.DataFrame:
