@@ -97,3 +97,19 @@ def test_install_is_idempotent_and_the_commands_install_it():
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           check=True)
     assert proc.stderr.strip().splitlines()[-1] == "True"
+
+
+@pytest.mark.parametrize("value", ["off", "false", "2", "0x1", "١"])
+def test_a_bad_setting_is_one_line_before_any_work(value, tmp_path):
+    out = tmp_path / "x.csv"
+    proc = subprocess.run([sys.executable, "-m", "gnibench.suite.cli.main", "solve", "kepler-2d",
+                           "rk4:h=0.1", "--steps", "5", "-o", str(out)], capture_output=True,
+                          text=True, check=False,
+                          env={**os.environ, "GNIBENCH_FRAME_CACHE": value})
+    lines = proc.stderr.strip().splitlines()
+    assert proc.returncode == 2 and len(lines) == 1, proc.stderr
+    assert lines[0] == (f"gnibench: error: bad GNIBENCH_FRAME_CACHE={value!r}; allowed: unset, "
+                        "0 (off) or 1 (on)")
+    assert not out.exists()
+    for good in ("", " 0 ", "1"):
+        datastack.check_setting({"GNIBENCH_FRAME_CACHE": good})

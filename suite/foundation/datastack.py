@@ -29,7 +29,9 @@ CPU, 3.47 million -> 0.68 million page faults, system time 19.9 s -> 1.8 s.
 
 Installed by the command line, the Python API, the kernels' loader and the runner's workers
 (:func:`install` is idempotent and a no-op where it does not apply: another interpreter than
-CPython 3.11-3.13 with the GIL, or llvmlite missing). ``GNIBENCH_FRAME_CACHE=0`` turns it off.
+CPython 3.11-3.13 with the GIL, or llvmlite missing). ``GNIBENCH_FRAME_CACHE=0`` turns it off;
+a value other than 0 or 1 is refused before any work (:func:`check_setting`, from the commands'
+check of the environment, :func:`gnibench.suite.foundation.budgets.check_limits`).
 """
 from __future__ import annotations
 
@@ -108,6 +110,16 @@ def applies() -> bool:
     return (sys.implementation.name == "cpython" and (3, 11) <= sys.version_info[:2] <= (3, 13)
             and not sysconfig.get_config_var("Py_GIL_DISABLED")
             and os.environ.get("GNIBENCH_FRAME_CACHE", "1").strip() != "0")
+
+
+def check_setting(environ=None) -> None:
+    """Refuse a value of ``GNIBENCH_FRAME_CACHE`` other than unset, empty, 0 or 1 (``off`` or
+    ``false`` would silently keep the cache on)."""
+    from gnibench.suite.foundation.errors import UserError
+
+    text = (os.environ if environ is None else environ).get("GNIBENCH_FRAME_CACHE")
+    if text is not None and text.strip() not in ("", "0", "1"):
+        raise UserError(f"bad GNIBENCH_FRAME_CACHE={text!r}; allowed: unset, 0 (off) or 1 (on)")
 
 
 def installed() -> bool:
