@@ -13,7 +13,8 @@ import sys
 import pytest
 from gnibench.suite.foundation import datastack
 
-pytestmark = pytest.mark.skipif(not datastack.applies(), reason="CPython 3.11-3.13 with the GIL")
+pytestmark = pytest.mark.skipif(not (datastack.applies() and datastack.llvm_reads_opaque_pointers()),
+                                reason="CPython 3.11-3.13 with the GIL, llvmlite on LLVM >= 15")
 
 #: calls at every depth 1..400 (the edge of a chunk lies at about 100-200 frames), 200 times:
 #: each call deeper than an edge crosses it twice

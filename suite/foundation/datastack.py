@@ -29,7 +29,7 @@ CPU, 3.47 million -> 0.68 million page faults, system time 19.9 s -> 1.8 s.
 
 Installed by the command line, the Python API, the kernels' loader and the runner's workers
 (:func:`install` is idempotent and a no-op where it does not apply: another interpreter than
-CPython 3.11-3.13 with the GIL, or llvmlite missing). ``GNIBENCH_FRAME_CACHE=0`` turns it off;
+CPython 3.11-3.13 with the GIL, or llvmlite missing or on an LLVM older than 15). ``GNIBENCH_FRAME_CACHE=0`` turns it off;
 a value other than 0 or 1 is refused before any work (:func:`check_setting`, from the commands'
 check of the environment, :func:`gnibench.suite.foundation.budgets.check_limits`).
 """
@@ -112,6 +112,17 @@ def applies() -> bool:
             and os.environ.get("GNIBENCH_FRAME_CACHE", "1").strip() != "0")
 
 
+def llvm_reads_opaque_pointers() -> bool:
+    """The IR above writes opaque pointers (``ptr``), which llvmlite's LLVM reads from version 15
+    on; with an older one :func:`install` does nothing."""
+    try:
+        import llvmlite.binding as llvm
+
+        return tuple(llvm.llvm_version_info) >= (15,)
+    except Exception:                                   # noqa: BLE001
+        return False
+
+
 def check_setting(environ=None) -> None:
     """Refuse a value of ``GNIBENCH_FRAME_CACHE`` other than unset, empty, 0 or 1 (``off`` or
     ``false`` would silently keep the cache on)."""
@@ -132,7 +143,7 @@ def install() -> bool:
     global _engine
     if _engine is not None:
         return True
-    if not applies():
+    if not applies() or not llvm_reads_opaque_pointers():
         return False
     try:
         import ctypes
