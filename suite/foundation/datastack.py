@@ -27,11 +27,12 @@ initialises what it uses). Arena calls are made with the GIL held, so the two gl
 lock. Measured on ``tests/test_time_grid.py`` from an empty kernel cache: 90.2 s -> 70.3 s of
 CPU, 3.47 million -> 0.68 million page faults, system time 19.9 s -> 1.8 s.
 
-Installed by the command line, the Python API, the kernels' loader and the runner's workers
-(:func:`install` is idempotent and a no-op where it does not apply: another interpreter than
-CPython 3.11-3.13 with the GIL, or llvmlite missing or on an LLVM older than 15). ``GNIBENCH_FRAME_CACHE=0`` turns it off;
-a value other than 0 or 1 is refused before any work (:func:`check_setting`, from the commands'
-check of the environment, :func:`gnibench.suite.foundation.budgets.check_limits`).
+Installed by the command line, the Python API, the kernels' loader and the test processes (forked
+workers inherit it) (:func:`install` is idempotent and a no-op where it does not apply: another
+interpreter than CPython 3.11-3.13 with the GIL, or llvmlite missing or on an LLVM older than 15).
+``GNIBENCH_FRAME_CACHE=0`` turns it off; a value other than 0 or 1 is refused before any work
+(:func:`check_setting`, from the commands' check of the environment,
+:func:`gnibench.suite.foundation.budgets.check_limits`).
 """
 from __future__ import annotations
 
