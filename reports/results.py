@@ -189,10 +189,11 @@ def load_manifest(figure_dir: Path) -> dict:
         if not isinstance(p, dict):
             raise TypeError("a panel must be an object")
         curves = [c.get("label", "") if isinstance(c, dict) else str(c) for c in p.get("curves", [])]
-        # the pages do not render mathtext: its labels as plain Unicode there
+        # the pages do not render mathtext: its labels as plain Unicode there; the pages list the
+        # labelled curves (an unlabelled one, such as the eyes of [HLW] Fig 1.1's cat, left ", ,")
         panels.append({k: plain_math(str(p.get(k, "") or "")) for k in ("id", "title", "xlabel",
                                                                           "ylabel")}
-                      | {"curves": [plain_math(str(c)) for c in curves]})
+                      | {"curves": [plain_math(str(c)) for c in curves if str(c).strip()]})
     text = {k: "" if doc.get(k) is None else str(doc.get(k))
             for k in ("id", "number", "caption", "reference", "scale")}
     notes = _strings(doc.get("notes"), "notes") + _strings(doc.get("note") or None, "note")

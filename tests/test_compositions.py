@@ -37,7 +37,6 @@ def test_mclachlan_is_symmetric_and_consistent():
     assert c.substeps(c.YOSHIDA4) == tuple((0.5 * g, 0.5 * g) for g in c.YOSHIDA4)
 
 
-
 COMPOSED = ["yoshida4", "yoshida8", "suzuki4", "kahan-li6", "kahan-li8", "mclachlan4"]
 
 

@@ -168,6 +168,17 @@ def test_the_pages_show_mathtext_labels_as_plain_text(tmp_path, label, want):
     assert panel["title"] == panel["ylabel"] == want and panel["curves"] == [want]
 
 
+def test_the_pages_list_only_labelled_curves(tmp_path):
+    """[HLW] Fig 1.1's panels draw the cat's eyes as curves without a label: the page's list of
+    curves read "A, φₜ(A), φ₂ₜ(A), φ₃ₜ(A), ," before."""
+    fig = tmp_path / "figure"
+    fig.mkdir()
+    (fig / "a.png").write_bytes(png_bytes())
+    (fig / "figure.json").write_text(json.dumps({"caption": "c", "files": ["a.png"], "panels": [
+        {"id": "p", "curves": [{"label": "A"}, {"label": ""}, {}, {"label": " "}, "B"]}]}))
+    assert load_manifest(fig)["panels"][0]["curves"] == ["A", "B"]
+
+
 def test_bad_manifest_is_reported_on_the_page(results, tmp_path):
     import shutil
 

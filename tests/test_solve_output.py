@@ -35,7 +35,7 @@ def _both(columns, meta, fmt):
 @pytest.mark.parametrize("problem, method, options", CELLS)
 def test_solve_tables_are_written_as_pandas_writes_them(problem, method, options):
     out = solve_output(solve_cell_spec(problem, method, **options))
-    assert _plain(out.columns, np), list(out.columns)        # the fast path is the one taken
+    assert _plain(out.columns), list(out.columns)        # the fast path is the one taken
     for fmt in ("csv", "json"):
         fast, slow = _both(out.columns, out.meta, fmt)
         assert fast == slow, (problem, method, fmt)
@@ -59,8 +59,8 @@ def test_edge_values_are_written_as_pandas_writes_them():
     for name, bad in (("steps", np.full(n, 0.5)), ("q", np.array(["a"] * n, dtype=object)),
                       ("a,b", x), ("flag", x > 0)):
         cols = {**columns, name: bad}
-        assert not _plain(cols, np), name                # left to pandas, same text as before
-    assert not _plain({"t": x}, np)                      # one column: csv quotes a lone ""
+        assert not _plain(cols), name                # left to pandas, same text as before
+    assert not _plain({"t": x})                      # one column: csv quotes a lone ""
 
 
 def test_solve_command_does_not_import_pandas():

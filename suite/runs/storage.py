@@ -60,14 +60,6 @@ def read_parquet_meta(path: Path) -> dict:
     return json.loads(md.get(b"gnibench", b"{}"))
 
 
-def write_result(traj, metrics, fmt: str, out: Path | None, stdout) -> None:
-    """Write one cell's table (samples or section crossings) in csv, json or parquet, to a file
-    or stdout; ``metrics`` is its MetricOutput (per-sample columns, per-cell values in meta)."""
-    from gnibench.suite.runs.tables import sample_frame
-
-    write_frame(sample_frame(traj, metrics), provenance(traj, metrics), fmt, out, stdout)
-
-
 def write_columns(columns: dict, meta: dict, fmt: str, out: Path | None, stdout) -> None:
     """:func:`write_frame` of the table of one cell given as its columns (name -> 1-D array,
     :func:`gnibench.suite.runs.tables.sample_columns`): csv and json are written from the arrays,
@@ -76,13 +68,13 @@ def write_columns(columns: dict, meta: dict, fmt: str, out: Path | None, stdout)
     csv would quote), go through the DataFrame."""
     import numpy as np
 
-    if fmt == "parquet" or not _plain(columns, np):
+    if fmt == "parquet" or not _plain(columns):
         from gnibench.suite.runs.tables import frame_of
 
         write_frame(frame_of(columns), meta, fmt, out, stdout)
         return
     if fmt == "csv":
-        text = _csv_text(columns, np)
+        text = _csv_text(columns)
     else:
         numbers = {c: [x if math.isfinite(x) else None
                        for x in np.asarray(v, dtype=float).tolist()] for c, v in columns.items()}
@@ -93,11 +85,13 @@ def write_columns(columns: dict, meta: dict, fmt: str, out: Path | None, stdout)
         atomic_write(out, lambda p: Path(p).write_text(text))
 
 
-def _plain(columns: dict, np) -> bool:
+def _plain(columns: dict) -> bool:
     """Columns that :func:`_csv_text` writes as pandas does: at least two (a lone empty field is
     quoted by csv), names without a separator, quote or line break, numeric 1-D arrays of one
     length, ``steps`` (a nullable integer in the DataFrame, :func:`~gnibench.suite.runs.tables.
     missing_steps`) whole numbers where not NaN."""
+    import numpy as np
+
     arrays = list(columns.values())
     if len(arrays) < 2 or any(not isinstance(a, np.ndarray) or a.ndim != 1
                               or a.dtype.kind not in "fiu" or len(a) != len(arrays[0])
@@ -112,10 +106,12 @@ def _plain(columns: dict, np) -> bool:
     return True
 
 
-def _csv_text(columns: dict, np) -> str:
+def _csv_text(columns: dict) -> str:
     """The csv ``DataFrame.to_csv(index=False)`` writes for :func:`_plain` columns: floats as
     their shortest repr (numpy's ``astype(str)``, which pandas uses too), NaN empty, integers
     and the whole-number ``steps`` as integers."""
+    import numpy as np
+
     fields = []
     for name, a in columns.items():
         if a.dtype.kind == "f" and name == "steps":
