@@ -7,6 +7,7 @@ same floating-point operations as the compiled code, so equal results before and
 inlining show that no operation was changed, reordered or dropped. No numba compilation."""
 from __future__ import annotations
 
+import functools
 import re
 
 import numpy as np
@@ -14,7 +15,7 @@ import pytest
 from gnibench.methods.kernels.slots import STATE, Y_ROWS
 from gnibench.suite.cell.codegen import _inline, module_source
 from gnibench.suite.cell.spec import prepare
-from gnibench.suite.foundation.inline import BIG_TUPLE, inline_source
+from gnibench.suite.foundation.inline import BIG_TUPLE, _function_blocks, inline_source
 
 
 def _python(text: str, problem=None) -> dict:
@@ -171,7 +172,6 @@ def test_a_global_shadowed_by_a_local_of_the_caller_is_not_inlined():
 def _frontend_failures(text: str, where) -> list[str]:
     """The functions of an inlined module holding a tuple display of more than BIG_TUPLE
     elements that numba's front end (bytecode -> IR) refuses (the others cannot meet this)."""
-    import ast
     import importlib.util
 
     from numba.core.compiler import run_frontend
@@ -181,8 +181,9 @@ def _frontend_failures(text: str, where) -> list[str]:
     spec = importlib.util.spec_from_file_location("gnibench_inline_probe", path)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
-    wide = {fn.name for fn in ast.parse(text).body if isinstance(fn, ast.FunctionDef)
-            and any(isinstance(t, ast.Tuple) and len(t.elts) > BIG_TUPLE for t in ast.walk(fn))}
+    lines = text.splitlines(keepends=True)
+    wide = {name for name, (_, head, end) in _function_blocks(lines).items()
+            if _holds_wide_tuple("".join(lines[head:end]))}
     assert wide, "no function holds a wide tuple: the probe would test nothing"
     bad = []
     for name, obj in vars(module).items():
@@ -197,6 +198,16 @@ def _frontend_failures(text: str, where) -> list[str]:
             if _FRONTEND_SEEN[key]:
                 bad.append(f"{name}: {_FRONTEND_SEEN[key]}")
     return bad
+
+
+@functools.lru_cache(maxsize=None)
+def _holds_wide_tuple(function_text: str) -> bool:
+    """Whether a function's text holds a tuple display of more than BIG_TUPLE elements (parsed
+    once per distinct text: the drivers of a family recur in every method's module)."""
+    import ast
+
+    return any(isinstance(t, ast.Tuple) and len(t.elts) > BIG_TUPLE
+               for t in ast.walk(ast.parse(function_text)))
 
 
 #: front-end outcomes by function: its source and the values of the plain globals it reads (the

@@ -30,7 +30,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from gnibench.suite.foundation import datastack
+from gnibench.suite.foundation import datastack, numba_passes
 from gnibench.suite.foundation.cache import (
     cache_dir,
     discard,
@@ -215,6 +215,7 @@ def _import(text: str, prefix: str):
     if key in _loaded:
         return _loaded[key]
     install_typing_memo()         # numba asks the same typing question once (numba_typing.py)
+    numba_passes.install()        # no closure pass where there is no closure (numba_passes.py)
     datastack.install()           # no frame-stack chunk mapped and unmapped per call (datastack.py)
     path = _module_path(key, prefix)
     if path.exists():
