@@ -103,3 +103,40 @@ def section_oscillator(monkeypatch, oid: str):
                           coords=("p",)),))
     monkeypatch.setitem(problems.REGISTRY, oid, rec)
     return rec
+
+
+def numba_types(dispatcher) -> tuple[dict, list]:
+    """The variable types and call signatures of a dispatcher's first compilation, as text."""
+    cres = dispatcher.overloads[dispatcher.signatures[0]]
+    return ({str(k): str(v) for k, v in cres.fndesc.typemap.items()},
+            sorted(str(v) for v in cres.fndesc.calltypes.values()))
+
+
+def with_and_without(patch: str, produce: str, after_uninstall: str = "") -> tuple:
+    """In a fresh interpreter: ``produce`` (``module:function`` under tests/) called with
+    ``gnibench.suite.foundation.<patch>`` installed, then again after its ``uninstall()`` (for
+    good in that process; ``after_uninstall`` is a statement checking numba's own code is back);
+    both results."""
+    import pickle
+    import subprocess
+    import sys
+    import textwrap
+    from pathlib import Path
+
+    module, function = produce.split(":")
+    code = textwrap.dedent(f"""
+        import pickle, sys
+        sys.path.insert(0, "tests")       # as pytest has it: the test files import support
+        from gnibench.suite.foundation import {patch} as patch
+        import tests.{module} as t
+        assert patch.install()
+        first = t.{function}()
+        patch.uninstall()
+        {after_uninstall}
+        second = t.{function}()
+        sys.stdout.buffer.write(pickle.dumps((first, second)))
+    """)
+    root = Path(__file__).resolve().parent.parent
+    done = subprocess.run([sys.executable, "-c", code], cwd=root, capture_output=True,
+                          check=True, timeout=300)
+    return pickle.loads(done.stdout)

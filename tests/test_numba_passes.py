@@ -5,17 +5,14 @@ from __future__ import annotations
 
 import functools
 import math
-import pickle
 import re
-import subprocess
-import sys
-import textwrap
 from pathlib import Path
 
 import numpy as np
 from numba import njit
 
 from gnibench.suite.foundation import numba_passes
+from support import numba_types, with_and_without
 
 
 def kernel(y, h, out):
@@ -51,12 +48,9 @@ def _compile(fn, *args):
     which count the compilations of the process, written as ``BvB``)."""
     d = njit(error_model="numpy")(fn)
     result = d(*args)
-    sig = d.signatures[0]
-    cres = d.overloads[sig]
-    typemap = {str(k): str(v) for k, v in cres.fndesc.typemap.items()}
-    calltypes = sorted(str(v) for v in cres.fndesc.calltypes.values())
-    llvm = re.sub(r"\[\d+ x i8\]", "[n x i8]", re.sub(r"B\d+v\d+B", "BvB", d.inspect_llvm(sig)))
-    return repr(result), typemap, calltypes, llvm
+    llvm = d.inspect_llvm(d.signatures[0])
+    llvm = re.sub(r"\[\d+ x i8\]", "[n x i8]", re.sub(r"B\d+v\d+B", "BvB", llvm))
+    return (repr(result), *numba_types(d), llvm)
 
 
 def compiled_all():
@@ -105,22 +99,10 @@ def test_the_closure_pass_is_skipped_only_where_it_has_nothing_to_do():
 
 def test_the_same_ir_types_code_and_numbers_without_them():
     """In a fresh process: compile with both pieces, then with numba's own (uninstall)."""
-    code = textwrap.dedent("""
-        import pickle, sys
-        from gnibench.suite.foundation import numba_passes
-        import tests.test_numba_passes as t
-        assert numba_passes.install()
-        with_them = t.compiled_all()
-        numba_passes.uninstall()
-        from numba.core import untyped_passes
-        assert not hasattr(untyped_passes.InlineClosureLikes.run_pass, "__wrapped__")
-        without = t.compiled_all()
-        sys.stdout.buffer.write(pickle.dumps((with_them, without)))
-    """)
-    root = Path(__file__).resolve().parent.parent
-    done = subprocess.run([sys.executable, "-c", code], cwd=root, capture_output=True,
-                          check=True, timeout=300)
-    with_them, without = pickle.loads(done.stdout)
+    with_them, without = with_and_without(
+        "numba_passes", "test_numba_passes:compiled_all",
+        "from numba.core import untyped_passes; "
+        "assert not hasattr(untyped_passes.InlineClosureLikes.run_pass, '__wrapped__')")
     assert with_them == without
     assert with_them[1:] == ["9.5", str(float(sum(i * 0.5 for i in range(5))))]
     assert with_them[0][-1] != [0.0, 0.0] and "fdiv" in with_them[0][3]

@@ -3,9 +3,6 @@ from __future__ import annotations
 
 import math
 import operator
-import subprocess
-import sys
-import textwrap
 
 import numpy as np
 from numba import njit
@@ -13,6 +10,7 @@ from numba.core import types
 from numba.core.registry import cpu_target
 
 from gnibench.suite.foundation import numba_typing
+from support import numba_types, with_and_without
 
 
 def kernel(y, h, out):
@@ -30,10 +28,7 @@ def _compiled():
     d = njit(error_model="numpy")(kernel)
     out = np.zeros(2)
     result = d((0.3, -0.7), 0.1, out)
-    cres = d.overloads[d.signatures[0]]
-    typemap = {str(k): str(v) for k, v in cres.fndesc.typemap.items()}
-    calltypes = sorted(str(v) for v in cres.fndesc.calltypes.values())
-    return result, out, typemap, calltypes
+    return (result, out, *numba_types(d))
 
 
 def test_the_memo_answers_the_questions_numba_asks_again():
@@ -47,25 +42,10 @@ def test_the_memo_answers_the_questions_numba_asks_again():
 
 def test_the_same_types_calls_and_numbers_without_the_memo():
     """In a fresh process: compile with the memo, then without it (numba's own method back)."""
-    code = textwrap.dedent("""
-        import pickle, sys
-        from gnibench.suite.foundation import numba_typing
-        import tests.test_numba_typing as t
-        assert numba_typing.install()
-        with_memo = t._compiled()
-        numba_typing.uninstall()
-        from numba.core.types import functions
-        assert not hasattr(functions.BaseFunction.get_call_type, "__wrapped__")
-        without = t._compiled()
-        sys.stdout.buffer.write(pickle.dumps((with_memo, without)))
-    """)
-    import pickle
-    from pathlib import Path
-
-    root = Path(__file__).resolve().parent.parent
-    done = subprocess.run([sys.executable, "-c", code], cwd=root, capture_output=True,
-                          check=True, timeout=300)
-    (r1, out1, tm1, ct1), (r2, out2, tm2, ct2) = pickle.loads(done.stdout)
+    (r1, out1, tm1, ct1), (r2, out2, tm2, ct2) = with_and_without(
+        "numba_typing", "test_numba_typing:_compiled",
+        "from numba.core.types import functions; "
+        "assert not hasattr(functions.BaseFunction.get_call_type, '__wrapped__')")
     assert tm1 == tm2
     assert ct1 == ct2
     assert r1 == r2 and np.array_equal(out1, out2)
