@@ -8,6 +8,7 @@ every eligible combination.
 from __future__ import annotations
 
 import functools
+import math
 import os
 
 import numpy as np
@@ -103,6 +104,22 @@ def section_oscillator(monkeypatch, oid: str):
                           coords=("p",)),))
     monkeypatch.setitem(problems.REGISTRY, oid, rec)
     return rec
+
+
+def sample_step(y, h, out):
+    """A small function shaped like a generated step (tuple arithmetic, arrays, a loop, a branch,
+    literals, builtins, math, int and bool results): what the numba patch tests compile with
+    and without their patch."""
+    k1 = (y[1], -y[0] / math.sqrt(y[0] * y[0] + 1.0))
+    z = (y[0] + 0.5 * h * k1[0], y[1] + 0.5 * h * k1[1])
+    s = 0.0
+    for i in range(2):
+        out[i] = z[i] * 2 - y[i] ** 2
+        if out[i] < 0.0:
+            s -= out[i]
+        else:
+            s += out[i]
+    return min(s, 1e300), max(z[0], z[1]), int(s > 0.0), bool(s)
 
 
 def numba_types(dispatcher) -> tuple[dict, list]:

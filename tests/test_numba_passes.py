@@ -4,7 +4,6 @@ function has closures or comprehensions (or ``reduce``: the pass is found to run
 from __future__ import annotations
 
 import functools
-import math
 import re
 from pathlib import Path
 
@@ -13,20 +12,7 @@ from numba import njit
 
 from gnibench.suite.foundation import numba_passes
 from support import numba_types, with_and_without
-
-
-def kernel(y, h, out):
-    """Tuples, arrays, a loop, a branch and math, as in a generated step."""
-    k1 = (y[1], -y[0] / math.sqrt(y[0] * y[0] + 1.0))
-    z = (y[0] + 0.5 * h * k1[0], y[1] + 0.5 * h * k1[1])
-    s = 0.0
-    for i in range(2):
-        out[i] = z[i] * 2 - y[i] ** 2
-        if out[i] < 0.0:
-            s -= out[i]
-        else:
-            s += out[i]
-    return min(s, 1e300), max(z[0], z[1])
+from support import sample_step as kernel
 
 
 def with_closure(x):

@@ -1,7 +1,6 @@
 """The typing memo (suite/foundation/numba_typing.py): used, and the same types and code without it."""
 from __future__ import annotations
 
-import math
 import operator
 
 import numpy as np
@@ -11,17 +10,7 @@ from numba.core.registry import cpu_target
 
 from gnibench.suite.foundation import numba_typing
 from support import numba_types, with_and_without
-
-
-def kernel(y, h, out):
-    """Tuple arithmetic, arrays, literals, builtins and math, as in a generated step."""
-    k1 = (y[1], -y[0] / math.sqrt(y[0] * y[0] + 1.0))
-    z = (y[0] + 0.5 * h * k1[0], y[1] + 0.5 * h * k1[1])
-    s = 0.0
-    for i in range(2):
-        out[i] = z[i] * 2 - y[i] ** 2
-        s += abs(out[i])
-    return min(s, 1e300), max(z[0], z[1]), int(s > 0.0), bool(s)
+from support import sample_step as kernel
 
 
 def _compiled():
