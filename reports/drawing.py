@@ -22,6 +22,7 @@ than one core, largest first.
 from __future__ import annotations
 
 import contextlib
+import gc
 import json
 import os
 from dataclasses import dataclass
@@ -94,6 +95,11 @@ def _serve(conn, parent: int, workers: int) -> None:
     from matplotlib.figure import Figure  # noqa: F401
 
     font_manager.findfont("DejaVu Sans")           # the font list read once, before the forks
+    # what this process holds now (the command's objects, forked, and matplotlib) lives until it
+    # ends: frozen for the cyclic garbage collector, so that the full collections of the drawing
+    # workers forked from it walk only what they make (a cold `reproduce all --scale quick`:
+    # 2.1 s and 2.5 s of the two workers' 5.3 s and 5.8 s of CPU were full collections)
+    gc.freeze()
     pool, futures = None, []
     try:
         while True:

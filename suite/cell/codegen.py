@@ -308,6 +308,9 @@ def load_problem(problem):
     return _import(text, "problem"), meta
 
 
+_owner_frozen: list[bool] = []      # whether the process was frozen by its owner (asked once)
+
+
 @contextlib.contextmanager
 def compiling():
     """While numba compiles (or loads) a cell, the objects alive before are frozen for Python's
@@ -315,8 +318,12 @@ def compiling():
     millions of objects, and each full collection it triggers walked the ~250 000 objects of a
     loaded gnibench (measured: 0.1 s each, 0.24 s of the 1.4 s of a cold kepler-2d dopri5 cell,
     0.5 s of a section cell's 4.4 s). The compiler's own garbage is still collected. A process
-    whose collector is disabled or already frozen by its owner is left as it is."""
-    if not gc.isenabled() or gc.get_freeze_count():
+    whose collector is disabled, or frozen by its owner when gnibench first compiles in it, is
+    left as it is (``gc.get_freeze_count`` walks the frozen objects: asked once per process, as
+    the test processes freeze millions, tests/conftest.py)."""
+    if not _owner_frozen:
+        _owner_frozen.append(gc.get_freeze_count() > 0)
+    if not gc.isenabled() or _owner_frozen[0]:
         yield
         return
     gc.freeze()
