@@ -172,17 +172,40 @@ def _panel(cells, by_cell, ids, column, style, name, with_exponent=True, memo=No
     return panel, zeros
 
 
-def layout(size: tuple[float, float], rows: int, right: float = 0.98) -> dict:
+def layout(size: tuple[float, float], rows: int, right: float = 0.98,
+           left: float = 0.09) -> dict:
     """Fixed margins (tight_layout measures every tick label: seconds per page on log axes)."""
     height = size[1]
-    return {"left": 0.09, "right": right, "bottom": 0.55 / height + 0.02,
+    return {"left": left, "right": right, "bottom": 0.55 / height + 0.02,
             "top": 1 - 0.45 / height, "hspace": 0.42, "wspace": 0.28}
 
 
-def _grid(panels: list[Panel], cols: int = 1, right: float = 0.56) -> Plot:
-    """The panels, one per row by default, legends to their right."""
+#: a one-column figure's axes: left edge and width (inches); its legend column follows
+AXES_LEFT, AXES_WIDTH = 1.17, 6.11
+#: the legend's text (points, as in :func:`_panel`), the width of a character of it in ems
+#: (DejaVu Sans averages ~0.55; kept wide so that no label is cut), and its line handle and pads
+LEGEND_PT, CHAR_EM, HANDLE_IN = 7.0, 0.62, 0.75
+
+
+def legend_width(panels: list[Panel]) -> float:
+    """The width (inches) of the widest legend of the panels, estimated from its longest label."""
+    chars = max((len(str(s.style.get("label", ""))) for p in panels for s in p.series), default=0)
+    return chars * LEGEND_PT * CHAR_EM / 72 + HANDLE_IN
+
+
+def _grid(panels: list[Panel], cols: int = 1, right: float | None = None) -> Plot:
+    """The panels, one per row by default. ``right`` None: one column, legends to the right of
+    axes of a fixed size, the figure as wide as its longest legend label needs (at most 13 in);
+    else the axes end at ``right`` (a fraction of 13 in, or of 6.2 in per column)."""
     rows = math.ceil(len(panels) / cols)
-    size = (13.0 if cols == 1 else 6.2 * cols, 3.3 * rows + 0.8)
+    height = 3.3 * rows + 0.8
+    if right is None:
+        width = min(13.0, max(8.0, AXES_LEFT + AXES_WIDTH + legend_width(panels)))
+        size = (width, height)
+        return Plot(size, rows, cols, panels,
+                    layout(size, rows, right=(AXES_LEFT + AXES_WIDTH) / width,
+                           left=AXES_LEFT / width))
+    size = (13.0 if cols == 1 else 6.2 * cols, height)
     return Plot(size, rows, cols, panels, layout(size, rows, right=right))
 
 
