@@ -182,25 +182,37 @@ def layout(size: tuple[float, float], rows: int, right: float = 0.98,
 
 #: a one-column figure's axes: left edge and width (inches); its legend column follows
 AXES_LEFT, AXES_WIDTH = 1.17, 6.11
-#: the legend's text (points, as in :func:`_panel`), the width of a character of it in ems
-#: (DejaVu Sans averages ~0.55; kept wide so that no label is cut), and its line handle and pads
-LEGEND_PT, CHAR_EM, HANDLE_IN = 7.0, 0.62, 0.75
+#: the legend's text size (points, as in :func:`_panel`), and its line handle and pads (inches)
+LEGEND_PT, HANDLE_IN = 7.0, 0.75
+#: advance widths of DejaVu Sans (matplotlib's default font), hundredths of an em, for the
+#: characters 32-126 (tests/test_report_drawing.py checks them against the font); others: 1 em
+ADVANCE = (32, 40, 47, 84, 64, 96, 78, 28, 39, 39, 50, 85, 32, 36, 32, 34, 64, 64, 64, 64, 64,
+           64, 64, 64, 64, 64, 34, 34, 84, 85, 84, 53, 100, 68, 69, 70, 77, 63, 58, 78, 75, 29,
+           29, 65, 56, 86, 75, 79, 60, 79, 70, 64, 62, 73, 68, 99, 69, 61, 68, 39, 34, 39, 84,
+           50, 50, 62, 63, 56, 64, 62, 35, 64, 63, 28, 28, 58, 28, 97, 63, 61, 63, 64, 42, 52,
+           39, 63, 59, 82, 59, 59, 52, 63, 34, 64, 84)
+
+
+def text_width(text: str, points: float) -> float:
+    """The width (inches) of ``text`` in DejaVu Sans at ``points`` (no kerning: a bound)."""
+    ems = sum(ADVANCE[ord(c) - 32] if 32 <= ord(c) < 127 else 100 for c in text) / 100
+    return ems * points / 72
 
 
 def legend_width(panels: list[Panel]) -> float:
-    """The width (inches) of the widest legend of the panels, estimated from its longest label."""
-    chars = max((len(str(s.style.get("label", ""))) for p in panels for s in p.series), default=0)
-    return chars * LEGEND_PT * CHAR_EM / 72 + HANDLE_IN
+    """The width (inches) of the widest legend of the panels: its longest label and the handle."""
+    labels = [str(s.style.get("label", "")) for p in panels for s in p.series]
+    return max((text_width(label, LEGEND_PT) for label in labels), default=0.0) + HANDLE_IN
 
 
 def _grid(panels: list[Panel], cols: int = 1, right: float | None = None) -> Plot:
     """The panels, one per row by default. ``right`` None: one column, legends to the right of
-    axes of a fixed size, the figure as wide as its longest legend label needs (at most 13 in);
+    axes of a fixed size, the figure as wide as its longest legend label needs (8 to 20 in);
     else the axes end at ``right`` (a fraction of 13 in, or of 6.2 in per column)."""
     rows = math.ceil(len(panels) / cols)
     height = 3.3 * rows + 0.8
     if right is None:
-        width = min(13.0, max(8.0, AXES_LEFT + AXES_WIDTH + legend_width(panels)))
+        width = min(20.0, max(8.0, AXES_LEFT + AXES_WIDTH + legend_width(panels)))
         size = (width, height)
         return Plot(size, rows, cols, panels,
                     layout(size, rows, right=(AXES_LEFT + AXES_WIDTH) / width,

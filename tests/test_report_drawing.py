@@ -163,3 +163,48 @@ def test_a_figure_that_cannot_be_written_is_one_line(tmp_path, workers):
         drawers.submit(Job(small_plot(), gone))
         drawers.wait()
     assert str(gone) in str(caught.value) and "\n" not in str(caught.value)
+
+
+@pytest.mark.parametrize("label", [
+    "c19 stormer-verlet:h=0.05  t^0.23",
+    "c31 rk4:h=0.05+observer:mode=simple,on=H/L,theta=1/1  t^0.08",
+    "c7 implicit-midpoint:h=0.05,fixed_point=500+penalty:mode=simple,on=H/L/A1/A2,theta=1000/1000"
+    "  t^0.08",
+    "c120 mmm-www:h=0.05+mmmm:www=mmmmmm,on=WWW/MMM,mmmmm=1000/1000/1000/1000  t^0.08",
+])
+def test_a_time_figure_is_as_wide_as_its_legend_needs(tmp_path, label):
+    """A one-column time-series figure (reports/plots.py ``_grid``): the legend is not cut by
+    the figure's right edge (white margin left in the PNG), and a short label leaves no wide
+    empty column (the figure narrower than the fixed 13 in of before)."""
+    from gnibench.reports.plots import _grid
+    from gnibench.reports.render import DPI, render
+    from PIL import Image
+
+    t = np.linspace(0.1, 10.0, 50)
+    panel = Panel(xscale="log", yscale="log", xlabel="t", ylabel="err", title="a panel", grid=True,
+                  legend={"fontsize": 7, "loc": "upper left", "bbox_to_anchor": (1.01, 1.0),
+                          "frameon": False})
+    for k in range(3):
+        panel.series.append(Series(t, (k + 1) * t, {"color": "#1F78B4", "label": f"{label}{k}"}))
+    plot = _grid([panel])
+    render(plot, tmp_path / "f.png")
+    pixels = np.asarray(Image.open(tmp_path / "f.png").convert("L"))
+    inked = np.nonzero((pixels < 250).any(axis=0))[0]
+    assert pixels.shape[1] == int(plot.size[0] * DPI)
+    assert inked[-1] < pixels.shape[1] - 5, (inked[-1], pixels.shape[1])     # legend not cut
+    if len(label) < 40:
+        assert plot.size[0] < 10.5 and pixels.shape[1] - inked[-1] < 1.2 * DPI
+
+
+def test_the_advance_widths_are_the_fonts():
+    """reports/plots.py ``ADVANCE``: DejaVu Sans's advance widths for the characters 32-126."""
+    from gnibench.reports.plots import ADVANCE
+    from matplotlib import font_manager, ft2font
+
+    font = ft2font.FT2Font(font_manager.findfont("DejaVu Sans"))
+    font.set_size(100, 72)
+    widths = []
+    for code in range(32, 127):
+        font.set_text(chr(code))
+        widths.append(round(font.get_width_height()[0] / 64))
+    assert tuple(widths) == ADVANCE
