@@ -23,6 +23,24 @@ def cap(pids, n: int, registry) -> list[str]:
     return ranked if FULL else ranked[:n]
 
 
+def takes(pid: str, method: str) -> bool:
+    """Whether a method accepts a problem (its structure needs), the problem with its default
+    options. Decided at collection from the problem bound without the check of its initial
+    point: that check generates the problem's code from sympy, which both test processes did at
+    once, for every problem, before their first test (3 s each, cold)."""
+    from gnibench.problems import REGISTRY
+    from gnibench.suite.cell.spec import prepare
+    from gnibench.suite.foundation.errors import UserError
+    from gnibench.suite.foundation.params import Bound, bind
+
+    rec = REGISTRY[pid]
+    try:
+        prepare(Bound(rec, bind(rec.params, {}, f"problem {pid}")), method)
+    except UserError:
+        return False
+    return True
+
+
 @functools.cache
 def base_module(spec: str):
     """(module, problem Bound, par) of a problem's generated code (its own compiled module)."""

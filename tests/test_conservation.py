@@ -22,10 +22,8 @@ import pytest
 from gnibench import methods
 from gnibench.problems import REGISTRY
 from gnibench.problems.codegen import symbolic
-from gnibench.suite.cell.spec import prepare
-from gnibench.suite.foundation.errors import UserError
 from gnibench.suite.metrics.invariants import invariant_errors
-from support import FULL, rate_scale
+from support import FULL, rate_scale, takes
 
 COMPILED = getattr(methods, "COMPILED", methods.METHODS)   # external engines have their own tests
 
@@ -96,11 +94,7 @@ def _rank(pids, kind):
 
 
 def _applies(pid, mid) -> bool:
-    try:
-        prepare(pid, mid)
-    except UserError:
-        return False
-    return True
+    return takes(pid, mid)
 
 
 def _symplectic_rk(m):

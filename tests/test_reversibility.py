@@ -38,8 +38,7 @@ from gnibench import methods
 from gnibench.problems import REGISTRY
 from gnibench.suite.cell.driver import integrate
 from gnibench.suite.cell.spec import prepare
-from gnibench.suite.foundation.errors import UserError
-from support import cap, rate_scale
+from support import cap, rate_scale, takes
 
 COMPILED = getattr(methods, "COMPILED", methods.METHODS)   # external engines have their own tests
 
@@ -54,13 +53,7 @@ MAX_DIM = 12                           # default sweep: skip the 36-dimensional 
 
 
 def _eligible(mid: str, pid: str) -> bool:
-    if pid in CHAOTIC:
-        return False
-    try:
-        prepare(pid, mid)
-    except UserError:
-        return False
-    return True
+    return pid not in CHAOTIC and takes(pid, mid)
 
 
 def _problems(mid: str) -> list[str]:

@@ -218,6 +218,35 @@ def test_a_flipped_bit_in_a_stored_part_is_recomputed_with_one_warning(tmp_path,
     assert _tables(out) == first
 
 
+@pytest.mark.parametrize("values", [["kepler-2d"] * 3, [], ["a", None, "\u00fc", float("nan"), 3,
+                                                            "y\x01", "", 2.5]])
+def test_a_text_column_is_hashed_value_by_value(values):
+    """The checksum's text columns: ``str(v)`` in UTF-8 and ``\\x01`` per value, ``\\x00`` for a
+    missing one (the definition stored parts were written with), whether the column is joined
+    at once (all text) or value by value; a value moved from one row to the next changes it."""
+    import hashlib
+
+    import pandas as pd
+
+    def by_value(vals):
+        h = hashlib.sha256()
+        for v in vals:
+            h.update(b"\x00" if v is None or (not isinstance(v, str) and pd.isna(v))
+                     else str(v).encode() + b"\x01")
+        return h.hexdigest()
+
+    assert hashlib.sha256(store_module._text_bytes(values)).hexdigest() == by_value(values)
+    for dtype in (object, "str"):
+        if dtype == "str" and not all(isinstance(v, str) for v in values):
+            continue
+        frame = pd.DataFrame({"m": pd.Series(values, dtype=dtype)})
+        assert store_module.content_checksum({}, frame) == store_module.content_checksum(
+            {}, pd.DataFrame({"m": pd.Series(values, dtype=object)}))
+    if len(values) > 1 and values[0] != values[1]:
+        swapped = [values[1], values[0], *values[2:]]
+        assert store_module._text_bytes(swapped) != store_module._text_bytes(values)
+
+
 def test_plain_progress_lines_when_not_a_terminal(tmp_path):
     exp = _write(tmp_path, TINY, "tiny")
     run = subprocess.run(GNIBENCH + ["run", str(exp), "-o", str(tmp_path / "out"), "-j", "2"],

@@ -28,9 +28,7 @@ import pytest
 from gnibench import methods
 from gnibench.problems import REGISTRY
 from gnibench.suite.cell.solve import solve
-from gnibench.suite.cell.spec import prepare
-from gnibench.suite.foundation.errors import UserError
-from support import FULL, rate_scale
+from support import FULL, rate_scale, takes
 
 DELTA = 1e-5
 TOL = 1e-8
@@ -47,9 +45,7 @@ def _structure_ok(mid, pid) -> bool:
     method, problem = COMPILED[mid], REGISTRY[pid]
     if problem.canonical is None:
         return False
-    try:
-        prepare(pid, mid)
-    except UserError:
+    if not takes(pid, mid):
         return False
     if "partition" in method.needs:
         blocks = {frozenset(b) for b in problem.partition}

@@ -236,7 +236,6 @@ def content_checksum(meta: dict, samples) -> str:
     samples, column by column (name, then the values: numbers as little-endian 8-byte words,
     anything else as text), so that one flipped bit in a value, a name or a row is seen."""
     import numpy as np
-    import pandas as pd
 
     h = hashlib.sha256(json.dumps(meta, sort_keys=True, default=str).encode())
     if samples is None:
@@ -251,10 +250,25 @@ def content_checksum(meta: dict, samples) -> str:
         elif kind == "f":
             h.update(np.ascontiguousarray(column.to_numpy(), dtype="<f8").tobytes())
         else:
-            for v in column.astype(object):
-                h.update(b"\x00" if v is None or (not isinstance(v, str) and pd.isna(v))
-                         else str(v).encode() + b"\x01")
+            h.update(_text_bytes(column.astype(object).tolist()))
     return h.hexdigest()
+
+
+def _text_bytes(values: list) -> bytes:
+    """The bytes :func:`content_checksum` hashes for a column of text (or other objects):
+    ``str(v)`` in UTF-8 then ``\\x01`` for each value, ``\\x00`` for a missing one. A column
+    without a missing value (every stored part: its problem and method, one per row) is joined at
+    once; hashing value by value took 2-4 ms per part, more than reading it."""
+    import pandas as pd
+
+    def missing(v) -> bool:
+        return v is None or (not isinstance(v, str) and bool(pd.isna(v)))
+
+    if not values:
+        return b""
+    if all(isinstance(v, str) for v in values):
+        return ("\x01".join(values) + "\x01").encode()
+    return b"".join(b"\x00" if missing(v) else str(v).encode() + b"\x01" for v in values)
 
 
 def _restore(d: dict) -> dict:
