@@ -60,11 +60,11 @@ def _tables(out: Path) -> dict[str, bytes]:
 def test_kill_9_then_resume_reuses_cells_and_gives_identical_tables(tmp_path):
     exp = _write(tmp_path, SLOW, "slow")
     whole, killed = tmp_path / "whole", tmp_path / "killed"
-    subprocess.run(GNIBENCH + ["run", str(exp), "-o", str(whole), "-j", "1"], check=True,
+    subprocess.run(GNIBENCH + ["run", str(exp), "-o", str(whole), "-j", "1", "--no-report"], check=True,
                    capture_output=True)
     for _ in range(5):           # the run is frozen (SIGSTOP) the moment 2 cells are stored
         shutil.rmtree(killed, ignore_errors=True)
-        proc = subprocess.Popen(GNIBENCH + ["run", str(exp), "-o", str(killed), "-j", "1"],
+        proc = subprocess.Popen(GNIBENCH + ["run", str(exp), "-o", str(killed), "-j", "1", "--no-report"],
                                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         deadline = time.monotonic() + 600            # a safety net against a hang only
         while len(list((killed / "parts").glob("*.parquet"))) < 2 and proc.poll() is None:
@@ -78,7 +78,7 @@ def test_kill_9_then_resume_reuses_cells_and_gives_identical_tables(tmp_path):
             break
     assert 2 <= stored < 6
     (killed / "parts" / ".abc.parquet.tmp999").write_bytes(b"half a part")   # as a kill leaves
-    again = subprocess.run(GNIBENCH + ["run", str(exp), "-o", str(killed), "-j", "1"],
+    again = subprocess.run(GNIBENCH + ["run", str(exp), "-o", str(killed), "-j", "1", "--no-report"],
                            check=True, capture_output=True, text=True)
     assert f"({stored} reused from the store, {6 - stored} to compute)" in again.stderr
     assert _tables(killed) == _tables(whole)
@@ -88,13 +88,13 @@ def test_kill_9_then_resume_reuses_cells_and_gives_identical_tables(tmp_path):
 def test_second_run_reuses_everything_and_fresh_recomputes(tmp_path, capsys):
     exp = _write(tmp_path, TINY, "tiny")
     out = tmp_path / "out"
-    assert main(["run", str(exp), "-o", str(out), "-j", "1"]) == 0
+    assert main(["run", str(exp), "-o", str(out), "-j", "1", "--no-report"]) == 0
     first = _tables(out)
     capsys.readouterr()
-    assert main(["run", str(exp), "-o", str(out), "-j", "1"]) == 0
+    assert main(["run", str(exp), "-o", str(out), "-j", "1", "--no-report"]) == 0
     assert "(8 reused from the store, 0 to compute)" in capsys.readouterr().err
     assert _tables(out) == first
-    assert main(["run", str(exp), "-o", str(out), "-j", "1", "--fresh"]) == 0
+    assert main(["run", str(exp), "-o", str(out), "-j", "1", "--fresh", "--no-report"]) == 0
     assert "(0 reused from the store, 8 to compute)" in capsys.readouterr().err
     assert _tables(out) == first
 
@@ -102,25 +102,25 @@ def test_second_run_reuses_everything_and_fresh_recomputes(tmp_path, capsys):
 def test_changed_spec_or_code_is_recomputed(tmp_path, capsys, monkeypatch):
     exp = _write(tmp_path, TINY, "tiny")
     out = tmp_path / "out"
-    assert main(["run", str(exp), "-o", str(out), "-j", "1"]) == 0
+    assert main(["run", str(exp), "-o", str(out), "-j", "1", "--no-report"]) == 0
     capsys.readouterr()
     exp.write_text(TINY.replace("vary.h = [0.05, 0.1]", "vary.h = [0.05, 0.2]"))
-    assert main(["run", str(exp), "-o", str(out), "-j", "1"]) == 0
+    assert main(["run", str(exp), "-o", str(out), "-j", "1", "--no-report"]) == 0
     assert "(4 reused from the store, 4 to compute)" in capsys.readouterr().err
     monkeypatch.setattr(store_module, "_fingerprint", "another version of the code")
-    assert main(["run", str(exp), "-o", str(out), "-j", "1"]) == 0
+    assert main(["run", str(exp), "-o", str(out), "-j", "1", "--no-report"]) == 0
     assert "(0 reused from the store, 8 to compute)" in capsys.readouterr().err
 
 
 def test_a_damaged_part_is_recomputed(tmp_path, capsys):
     exp = _write(tmp_path, TINY, "tiny")
     out = tmp_path / "out"
-    assert main(["run", str(exp), "-o", str(out), "-j", "1"]) == 0
+    assert main(["run", str(exp), "-o", str(out), "-j", "1", "--no-report"]) == 0
     first = _tables(out)
     part = sorted((out / "parts").glob("*.parquet"))[3]
     part.write_bytes(part.read_bytes()[:100])
     capsys.readouterr()
-    assert main(["run", str(exp), "-o", str(out), "-j", "1"]) == 0
+    assert main(["run", str(exp), "-o", str(out), "-j", "1", "--no-report"]) == 0
     assert "(7 reused from the store, 1 to compute)" in capsys.readouterr().err
     assert _tables(out) == first
 
@@ -143,7 +143,7 @@ def test_executors_give_byte_identical_tables(tmp_path):
     for name, args in {"serial": ["-j", "1"], "pool": ["-j", "2"],
                        "dask": ["--executor", "dask", "-j", "2"]}.items():
         outs[name] = tmp_path / name
-        assert main(["run", str(exp), "-o", str(outs[name]), *args]) == 0, name
+        assert main(["run", str(exp), "-o", str(outs[name]), *args, "--no-report"]) == 0, name
     assert _tables(outs["pool"]) == _tables(outs["serial"])
     assert _tables(outs["dask"]) == _tables(outs["serial"])
 
