@@ -115,10 +115,11 @@ def test_servers_that_wait_for_the_client_are_told_at_once():
             pass
 
     http = ThreadingHTTPServer(("127.0.0.1", 0), Quiet)
-    # a listening socket select() calls readable can have nothing to accept (Linux select(2),
-    # BUGS): a blocking accept then hung serve_forever, and http.shutdown() with it, forever
-    # (seen once, in a run slowed by a sampling profiler); non-blocking, the server's loop
-    # meets BlockingIOError, which socketserver ignores, and polls again
+    # a connection select() reported can be gone before accept() (an asynchronous network
+    # error: Linux accept(2), NOTES), and a blocking accept then waits for the next one: it hung
+    # serve_forever, and http.shutdown() with it, forever (seen once, a full run slowed by a
+    # sampling profiler). Non-blocking, as accept(2) advises: socketserver ignores the
+    # BlockingIOError and polls again
     http.socket.setblocking(False)
     threading.Thread(target=http.serve_forever, daemon=True).start()
     line = LinePeer(None)
