@@ -258,7 +258,7 @@ def _text_bytes(values: list) -> bytes:
     """The bytes :func:`content_checksum` hashes for a column of text (or other objects):
     ``str(v)`` in UTF-8 then ``\\x01`` for each value, ``\\x00`` for a missing one. A column
     without a missing value (every stored part: its problem and method, one per row) is joined at
-    once; hashing value by value took 2-4 ms per part, more than reading it."""
+    once (a part of 2001 rows: 0.36 ms for its checksum, 0.99 ms value by value)."""
     import pandas as pd
 
     def missing(v) -> bool:
