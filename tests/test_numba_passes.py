@@ -11,8 +11,7 @@ import numpy as np
 from numba import njit
 
 from gnibench.suite.foundation import numba_passes
-from support import numba_types, with_and_without
-from support import sample_step as kernel
+from support import numba_types, with_and_without, sample_step as kernel
 
 
 def with_closure(x):

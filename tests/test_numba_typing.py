@@ -9,8 +9,7 @@ from numba.core import types
 from numba.core.registry import cpu_target
 
 from gnibench.suite.foundation import numba_typing
-from support import numba_types, with_and_without
-from support import sample_step as kernel
+from support import numba_types, with_and_without, sample_step as kernel
 
 
 def _compiled():

@@ -308,7 +308,11 @@ def load_problem(problem):
     return _import(text, "problem"), meta
 
 
-_owner_frozen: list[bool] = []      # whether the process was frozen by its owner (asked once)
+@functools.cache
+def _frozen_by_owner() -> bool:
+    """Whether the process was frozen when gnibench first compiled in it (asked once:
+    ``gc.get_freeze_count`` walks the frozen objects)."""
+    return gc.get_freeze_count() > 0
 
 
 @contextlib.contextmanager
@@ -321,9 +325,7 @@ def compiling():
     whose collector is disabled, or frozen by its owner when gnibench first compiles in it, is
     left as it is (``gc.get_freeze_count`` walks the frozen objects: asked once per process, as
     the test processes freeze millions, tests/conftest.py)."""
-    if not _owner_frozen:
-        _owner_frozen.append(gc.get_freeze_count() > 0)
-    if not gc.isenabled() or _owner_frozen[0]:
+    if not gc.isenabled() or _frozen_by_owner():
         yield
         return
     gc.freeze()
