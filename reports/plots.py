@@ -199,10 +199,10 @@ def text_width(text: str, points: float) -> float:
     return ems * points / 72
 
 
-def legend_width(panels: list[Panel]) -> float:
+def legend_width(panels: list[Panel], points: float = LEGEND_PT) -> float:
     """The width (inches) of the widest legend of the panels: its longest label and the handle."""
     labels = [str(s.style.get("label", "")) for p in panels for s in p.series]
-    return max((text_width(label, LEGEND_PT) for label in labels), default=0.0) + HANDLE_IN
+    return max((text_width(label, points) for label in labels), default=0.0) + HANDLE_IN
 
 
 def _grid(panels: list[Panel], cols: int = 1, right: float | None = None) -> Plot:

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 from gnibench.reports.drawing import Job
 from gnibench.reports.palette import styles
-from gnibench.reports.plots import Figure, brief, clip, layout
+from gnibench.reports.plots import Figure, brief, clip, layout, legend_width
 from gnibench.reports.render import Panel, Plot, Series
 
 
@@ -77,14 +77,7 @@ def wp_figures(problem: str, cells, wall_by_cell: dict[int, float], out_dir: Pat
                     "label": clip(fam, 40)}))
             panels.append(panel)
     panels[0].title, panels[1].title = "against f-evaluations", "against wall time"
-    labelled = any(s.style.get("label") for p in panels for s in p.series)
-    size = (12.4, 3.9 * len(rows) + 0.6)
-    adjust = layout(size, len(rows), right=0.74 if labelled else 0.98)   # room for 40-character labels
-    adjust["top"] = 1 - 0.75 / size[1]
-    plot = Plot(size, len(rows), 2, panels, adjust, suptitle=f"{brief(problem)}: work-precision",
-                suptitle_style={"fontsize": 11, "x": 0.42, "y": 0.995},
-                legend={"loc": "upper right", "bbox_to_anchor": (1.0, 0.955), "fontsize": 7.5,
-                        "framealpha": 0.9})
+    plot = _plot(panels, len(rows), f"{brief(problem)}: work-precision")
     file = f"{prefix}-work-precision.png"
     jobs.append(Job(plot, out_dir / file))
     words = ", ".join(label for _, label in rows)
@@ -97,3 +90,23 @@ def wp_figures(problem: str, cells, wall_by_cell: dict[int, float], out_dir: Pat
         cap += (" " + ", ".join(missing) + " do not count f-evaluations: they appear on the "
                 "wall-time panels only.")
     return [Figure(f"{slug}/{file}", f"{problem}: error against cost", cap)]
+
+
+#: the panels' left and right edges (inches): two columns of axes of a fixed size
+AXES_LEFT, AXES_RIGHT = 1.12, 9.18
+LEGEND_PT = 7.5
+
+
+def _plot(panels: list[Panel], rows: int, title: str) -> Plot:
+    """Two columns of panels of a fixed size, the families' legend just right of them, the figure
+    as wide as the legend's longest label needs (labels are clipped to 40 characters)."""
+    labelled = any(s.style.get("label") for p in panels for s in p.series)
+    width = AXES_RIGHT + 0.1 + legend_width(panels, LEGEND_PT) if labelled else AXES_RIGHT + 0.25
+    size = (width, 3.9 * rows + 0.6)
+    adjust = layout(size, rows, right=AXES_RIGHT / width, left=AXES_LEFT / width)
+    adjust["top"] = 1 - 0.75 / size[1]
+    return Plot(size, rows, 2, panels, adjust, suptitle=title,
+                suptitle_style={"fontsize": 11, "x": (AXES_LEFT + AXES_RIGHT) / 2 / width,
+                                "y": 0.995},
+                legend={"loc": "upper left", "bbox_to_anchor": ((AXES_RIGHT + 0.1) / width, 0.955),
+                        "fontsize": LEGEND_PT, "framealpha": 0.9})

@@ -196,6 +196,33 @@ def test_a_time_figure_is_as_wide_as_its_legend_needs(tmp_path, label):
         assert plot.size[0] < 10.5 and pixels.shape[1] - inked[-1] < 1.2 * DPI
 
 
+@pytest.mark.parametrize("label", ["rk4", "heyoka-taylor:precision=long", "m" * 40, "W" * 40])
+def test_a_work_precision_legend_sits_beside_the_panels_uncut(tmp_path, label):
+    """reports/workprecision.py ``_plot``: the families' legend starts just right of the panels
+    (no empty column between them, as the 12.4 in figure left for short labels) and is not cut
+    by the figure's right edge, up to the 40 characters a family label is clipped to."""
+    from gnibench.reports.render import DPI, render
+    from gnibench.reports.workprecision import AXES_RIGHT, _plot
+    from PIL import Image
+
+    x = np.array([1e2, 2e2, 4e2])
+    panels = []
+    for _ in range(2):
+        panel = Panel(xscale="log", yscale="log", xlabel="nfev", ylabel="error", grid=True)
+        for k in range(2):
+            panel.series.append(Series(x, x ** -(k + 1.0), {"color": "#1F78B4", "marker": "s",
+                                                             "label": f"{label[:39]}{k}"}))
+        panels.append(panel)
+    plot = _plot(panels, 1, "p: work-precision")
+    render(plot, tmp_path / "wp.png")
+    pixels = np.asarray(Image.open(tmp_path / "wp.png").convert("L"))
+    inked = np.nonzero((pixels[: pixels.shape[0] // 2] < 250).any(axis=0))[0]
+    assert inked[-1] < pixels.shape[1] - 5, (inked[-1], pixels.shape[1])     # legend not cut
+    beyond = inked[inked > AXES_RIGHT * DPI + 2]                              # the legend's ink
+    assert beyond.size and beyond[0] < (AXES_RIGHT + 0.3) * DPI               # right beside
+    assert pixels.shape[1] - inked[-1] < 1.0 * DPI                            # no wide margin
+
+
 def test_the_advance_widths_are_the_fonts():
     """reports/plots.py ``ADVANCE``: DejaVu Sans's advance widths for the characters 32-126."""
     from gnibench.reports.plots import ADVANCE
