@@ -3,7 +3,9 @@ every reproduced figure must pass (imported as ``support_figures``; tests/ is on
 
 Each shipped figure is reproduced once per test run, by the file of its section, in that file's
 session fixture (``gnibench reproduce`` of the section's figures into one results store); the file
-checks it with :func:`check_figure` and with what the section's figures must show besides.
+checks it with :func:`check_figure` and with what the section's figures must show besides. The
+file's claims are verified at the quick scale in the same store, as ``gnibench verify -o DIR`` after
+``gnibench reproduce -o DIR`` does: the cells of the figures are reused, not computed again.
 tests/test_figures.py checks that every figure of the registry has exactly one such file.
 """
 from __future__ import annotations
@@ -21,6 +23,16 @@ SECTION_FIGURES = {
     "test_hlw_claims": ["hlw-fig-1.1", "hlw-fig-1.2", "hlw-fig-1.3", "hlw-fig-1.4", "hlw-fig-2.2",
                         "hlw-fig-2.3", "hlw-fig-2.4", "hlw-fig-3.1", "hlw-table-2.1"],
 }
+
+
+def reused_cells(stderr: str) -> int:
+    """How many cells a ``verify`` or ``reproduce`` took from its store instead of computing them
+    (its first line: ``N cells -> DIR (K reused from the store, M to compute)``)."""
+    import re
+
+    found = re.search(r"\((\d+) reused from the store, \d+ to compute\)", stderr)
+    assert found, stderr
+    return int(found.group(1))
 
 
 def check_figure(results: Path, scale: str = "quick") -> dict:

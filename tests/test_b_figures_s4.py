@@ -12,7 +12,7 @@ import pytest
 from gnibench.suite.cli.main import main
 from gnibench.suite.ledger.closed_forms_b41 import apsides
 from gnibench.suite.ledger.entries import load_ledger
-from support_figures import SECTION_FIGURES, check_figure
+from support_figures import SECTION_FIGURES, check_figure, reused_cells
 
 FIGURES = SECTION_FIGURES["test_b_figures_s4"]
 CLAIMS = [f"B-4.1-{c}" for c in "abcdefghijk"] + ["B-3-d"]   # B-2-f: an aggregate over §5, §6
@@ -95,13 +95,14 @@ def test_apsides_closed_form():
         assert abs(-0.4 * r * r + 2.0 * r - 2.0) < 1e-12
 
 
-def test_quick_scale_verdicts(tmp_path, capsys):
+def test_quick_scale_verdicts(reproduced, capsys):
     """Every claim added for §2-§4 has its expected outcome at the quick scale, or is skipped
     there (scale = "paper")."""
-    code = main(["verify", *CLAIMS, "--scale", "quick", "-o", str(tmp_path), "-j", "1", "--no-report",
+    code = main(["verify", *CLAIMS, "--scale", "quick", "-o", str(reproduced), "-j", "1", "--no-report",
                  "--format", "json"])
     captured = capsys.readouterr()
     assert code == 0, captured.err
+    assert reused_cells(captured.err) > 0           # the figures' cells, from the same store
     rows = {r["id"]: r for r in json.loads(captured.out)}
     ledger = load_ledger()
     assert set(rows) == set(CLAIMS)

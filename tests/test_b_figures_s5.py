@@ -7,7 +7,7 @@ import json
 import pytest
 from gnibench.suite.cli.main import main
 from gnibench.suite.ledger.entries import load_ledger
-from support_figures import SECTION_FIGURES, check_figure
+from support_figures import SECTION_FIGURES, check_figure, reused_cells
 
 FIGURES = SECTION_FIGURES["test_b_figures_s5"]
 CLAIMS = ["B-5.1-d"] + [f"B-5.2-{x}" for x in "abcdefghij"]
@@ -62,16 +62,18 @@ def test_claims_are_linked_and_flagged():
             assert c.figure in FIGURES, cid
 
 
-def _verify(tmp_path, capsys, scale: str) -> dict:
-    code = main(["verify", *CLAIMS, "--scale", scale, "-o", str(tmp_path / "v"), "-j", "1", "--no-report",
+def _verify(out, capsys, scale: str) -> dict:
+    code = main(["verify", *CLAIMS, "--scale", scale, "-o", str(out), "-j", "1", "--no-report",
                  "--format", "json"])
     captured = capsys.readouterr()
     assert code == 0, captured.err
+    if scale == "quick":
+        assert reused_cells(captured.err) > 0       # the figures' cells, from the same store
     return {r["id"]: r for r in json.loads(captured.out)}
 
 
-def test_claims_quick(tmp_path, capsys):
-    rows = _verify(tmp_path, capsys, "quick")
+def test_claims_quick(figures, capsys):
+    rows = _verify(figures, capsys, "quick")
     for cid in CLAIMS:
         r = rows[cid]
         if cid in PAPER_ONLY:
@@ -86,6 +88,6 @@ def test_claims_quick(tmp_path, capsys):
 
 @pytest.mark.slow
 def test_claims_paper(tmp_path, capsys):
-    rows = _verify(tmp_path, capsys, "paper")
+    rows = _verify(tmp_path / "v", capsys, "paper")
     for cid in CLAIMS:
         assert rows[cid]["outcome"] == rows[cid]["expected"], (cid, rows[cid]["measured"])

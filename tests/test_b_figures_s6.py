@@ -7,7 +7,7 @@ import sys
 
 import pandas as pd
 import pytest
-from support_figures import SECTION_FIGURES, check_figure
+from support_figures import SECTION_FIGURES, check_figure, reused_cells
 
 FIGURES = SECTION_FIGURES["test_b_figures_s6"]
 #: claims and their outcomes at the quick scale (paper-only claims: skipped; the observer runs
@@ -59,10 +59,11 @@ def test_sections_are_on_the_plane(reproduced):
     assert list(c16["method"]) == list(c17["method"])
 
 
-def test_claims_quick_verdicts(tmp_path):
-    r = _gnibench("verify", *QUICK, "--scale", "quick", "-o", str(tmp_path), "-j", "1",
+def test_claims_quick_verdicts(reproduced):
+    r = _gnibench("verify", *QUICK, "--scale", "quick", "-o", str(reproduced), "-j", "1",
                   "--no-report")
     assert r.returncode == 0, r.stderr
-    ledger = pd.read_parquet(tmp_path / "ledger.parquet").set_index("id")
+    assert reused_cells(r.stderr) > 0               # the figures' cells, from the same store
+    ledger = pd.read_parquet(reproduced / "ledger.parquet").set_index("id")
     got = {i: ledger.loc[i, "outcome"] for i in QUICK}
     assert got == QUICK

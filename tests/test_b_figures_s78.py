@@ -12,7 +12,7 @@ from gnibench.suite.cli.main import main
 from gnibench.suite.foundation.errors import UserError
 from gnibench.suite.ledger.closed_forms_b7 import so4_growth, so4_overlap, so4_plateau
 from gnibench.suite.ledger.entries import load_ledger, missing_parts
-from support_figures import SECTION_FIGURES, check_figure
+from support_figures import SECTION_FIGURES, check_figure, reused_cells
 
 AXES = {"b-fig-26": ("x₅", "x₆"), "b-fig-27": ("t", "|H3 − H3(x₀)|"),
            "b-fig-28": ("t", "|H1 − H1(x₀)|"), "b-fig-29": ("t", "|H2 − H2(x₀)|"),
@@ -78,10 +78,12 @@ def test_fig_31_records_its_random_start(figures):
     assert f"angle={2 * np.pi * u[2]:.6f}" in spec
 
 
-def test_claims_have_their_expected_verdicts_at_quick_scale(tmp_path, capsys):
-    code = main(["verify", *CLAIMS, "--scale", "quick", "-o", str(tmp_path), "-j", "1", "--no-report",
+def test_claims_have_their_expected_verdicts_at_quick_scale(figures, capsys):
+    code = main(["verify", *CLAIMS, "--scale", "quick", "-o", str(figures), "-j", "1", "--no-report",
                  "--format", "json"])
-    rows = {r["id"]: r for r in json.loads(capsys.readouterr().out)}
+    captured = capsys.readouterr()
+    assert reused_cells(captured.err) > 0           # the figures' cells, from the same store
+    rows = {r["id"]: r for r in json.loads(captured.out)}
     paper_only = {i for i in CLAIMS if load_ledger()[i].scale == "paper"}
     assert paper_only == {"B-7.2-a", "B-7.2-b", "B-7.2-c", "B-8.2-a"}
     for i in CLAIMS[:-2]:

@@ -97,7 +97,7 @@ def test_truncated_numba_file_is_recompiled(warm, suffix):
 def test_tampered_numba_machine_code_is_recompiled(warm):
     cache, expected = warm
     stem = _cell_module(cache).stem
-    nbc = min((cache / "kernels" / "__pycache__").glob(f"{stem}.step-*.nbc"))
+    nbc = min((cache / "kernels" / "__pycache__").glob(f"{stem}.integrate-*.nbc"))
     raw = bytearray(nbc.read_bytes())
     raw[len(raw) // 2] ^= 0xFF
     nbc.write_bytes(bytes(raw))
@@ -161,7 +161,7 @@ def test_files_under_numba_cache_dir_are_checked_too(tmp_path):
     first = _solve(cache, NUMBA_CACHE_DIR=str(numba_dir))
     assert first.returncode == 0 and first.stderr == "", first.stderr
     stem = _cell_module(cache).stem
-    nbc = min(numba_dir.glob(f"*/{stem}.step-*.nbc"))
+    nbc = min(numba_dir.glob(f"*/{stem}.integrate-*.nbc"))
     raw = bytearray(nbc.read_bytes())
     raw[len(raw) // 2] ^= 0xFF
     nbc.write_bytes(bytes(raw))

@@ -15,7 +15,7 @@ from gnibench.suite.cli.main import main
 from gnibench.suite.ledger import closed_forms_hlw
 from gnibench.suite.ledger.entries import load_ledger
 from gnibench.suite.runs.experiment import shipped
-from support_figures import SECTION_FIGURES, check_figure
+from support_figures import SECTION_FIGURES, check_figure, reused_cells
 
 FIGURES = SECTION_FIGURES["test_hlw_claims"]
 CLAIMS_MD = Path(__file__).resolve().parents[2] / "shared" / "CLAIMS.md"
@@ -57,10 +57,11 @@ def test_table_2_1_reads_as_the_book_where_it_should(reproduced):
     assert sv["L"]["zero"]
 
 
-def test_representative_claims_have_their_expected_verdicts(tmp_path, capsys):
-    code = main(["verify", *CLAIMS, "--scale", "quick", "-o", str(tmp_path / "v"), "-j", "1", "--no-report",
+def test_representative_claims_have_their_expected_verdicts(reproduced, capsys):
+    code = main(["verify", *CLAIMS, "--scale", "quick", "-o", str(reproduced), "-j", "1", "--no-report",
                  "--format", "json"])
     captured = capsys.readouterr()
+    assert reused_cells(captured.err) > 0           # the figures' cells, from the same store
     rows = {r["id"]: r for r in json.loads(captured.out)}
     assert code == 0, [(i, r["verdict"], r["detail"]) for i, r in rows.items()
                        if r["outcome"] != r["expected"]]
@@ -74,7 +75,7 @@ def test_representative_claims_have_their_expected_verdicts(tmp_path, capsys):
     assert rows["HLW-2.1-table-G-SE"]["verdict"] == "partly"          # O(t h²) from (2.11)
     assert rows["HLW-1.1-b"]["measured"] <= 1e-9
     assert rows["HLW-2.3-d"]["measured"] > 0                          # midpoint anticlockwise
-    table = pd.read_parquet(tmp_path / "v" / "ledger.parquet")
+    table = pd.read_parquet(reproduced / "ledger.parquet")
     assert (table["figure"] != "").sum() >= 12
 
 
