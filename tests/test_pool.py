@@ -180,3 +180,30 @@ def test_a_pool_stopped_at_once_leaves_nothing(now):
     before = _children()
     Pool(3).start().stop(now=now)
     assert _children() == before
+
+
+def test_our_dask_workers_are_forked_from_a_preloaded_fork_server():
+    """gnibench's own LocalCluster forks its workers from a fork server that imported Dask and
+    what a cell needs (numba, its CPU target, the registries) once: a worker starts with them, and
+    its parent is that server, not this process; outside, Dask's default start method is back."""
+    pytest.importorskip("distributed")
+    import dask
+    from distributed import Client, LocalCluster
+    from gnibench.suite.runs.executors import FORKSERVER_PRELOAD, _forked_workers
+
+    def worker_state():
+        import multiprocessing
+        import sys
+
+        return ([m for m in FORKSERVER_PRELOAD if m in sys.modules],
+                multiprocessing.get_start_method(allow_none=True), os.getppid())
+
+    before = dask.config.get("distributed.worker.multiprocessing-method")
+    with _forked_workers():
+        with LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
+                          dashboard_address=None, scheduler_kwargs={"dashboard_address": "127.0.0.1:0"}
+                          ) as cluster, Client(cluster) as client:
+            ((loaded, method, parent),) = client.run(worker_state).values()
+    assert dask.config.get("distributed.worker.multiprocessing-method") == before
+    assert loaded == list(FORKSERVER_PRELOAD) and method == "forkserver"
+    assert parent != os.getpid()                           # forked by the server
