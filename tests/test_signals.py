@@ -23,8 +23,8 @@ SLOW = """
 name = "slow"
 title = "Twelve slow cells"
 reference = "[HLW] (2.2)"
-steps = 10000000
-every = 2500000
+steps = 5000000
+every = 1250000
 
 [[cells]]
 problems = ["kepler-2d"]
@@ -231,11 +231,13 @@ def test_an_interrupted_dask_run_kills_its_workers_and_no_nanny_restarts_one():
     pytest.importorskip("distributed")
     from distributed import Client, LocalCluster
     from distributed.core import Status
-    from gnibench.suite.runs.executors import _kill_workers
+    from gnibench.suite.runs.executors import _forked_workers, _kill_workers
 
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
-                      scheduler_kwargs={"dashboard_address": "127.0.0.1:0"}) as cluster, \
-            Client(cluster) as client:
+    with _forked_workers():                      # started as gnibench starts its own cluster
+        cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                               dashboard_address=None,
+                               scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})
+    with cluster, Client(cluster) as client:
         busy = [client.submit(time.sleep, 600, pure=False) for _ in range(2)]
         wait_for(lambda: sum(map(len, client.processing().values())) == 2, "busy workers")
         nannies = list(cluster.workers.values())
