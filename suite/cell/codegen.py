@@ -3,8 +3,9 @@
 numba's ``cache=True`` cannot cache a jitted function that receives another jitted function as an
 argument, so every cell gets its own generated module in which the problem's functions, the
 modifier terms, the method's step and the driver are plain ``@njit`` globals calling each other by
-name (the functions Python calls are cached by numba, :data:`PYTHON_ENTRIES`). The module text is keyed by its own hash; its file and numba's cache files live
-in ``<cache>/kernels``, so a second run in a new process loads machine code instead of compiling.
+name (the functions Python calls are cached by numba, :data:`PYTHON_ENTRIES`). The module text is
+keyed by its own hash; its file and numba's cache files live in ``<cache>/kernels``, so a second
+run in a new process loads machine code instead of compiling.
 When the file is written, the small functions are written into their callers
 (:mod:`gnibench.suite.foundation.inline`, :data:`INLINED`): numba then compiles a handful of
 functions per cell instead of 20 to 50 (kepler-2d dopri5: 33 compilations, 2.0 s of CPU, became 8,

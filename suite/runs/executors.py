@@ -167,8 +167,8 @@ def _dask(groups, jobs, scheduler) -> Iterator[CellOutcome]:
             cluster.close(timeout=5)
 
 
-#: What the fork server of our LocalCluster's workers imports once: Dask, and what a cell needs
-#: (gnibench.suite.runs.pool.preload: numba, its CPU target, the registries), instead of each worker
+#: What the fork server of our LocalCluster's workers imports once, instead of each worker: Dask,
+#: and what a cell needs (gnibench.suite.runs.pool.preload: numba, its CPU target, the registries)
 FORKSERVER_PRELOAD = ("distributed", "gnibench.suite.runs.forkserver")
 
 
