@@ -96,3 +96,27 @@ def test_redraw_uses_the_tables_and_refuses_stale_ones(tmp_path, capsys, monkeyp
     capsys.readouterr()
     assert main(["reproduce", "hlw-fig-1.4", "--redraw", "-o", str(tmp_path)]) == 2
     assert "the cells of the file changed" in capsys.readouterr().err
+
+
+def test_images_are_those_of_matplotlibs_own_layout_and_the_same_bytes_each_time(tmp_path,
+                                                                                   monkeypatch):
+    """draw_figure lays a figure out once (``_lay_out_once``) and draws the PNG and the SVG once
+    each: the PNG is byte for byte the one savefig writes when it runs the constrained layout
+    itself, and a second drawing writes the same bytes (the SVG's ids are salted by
+    ``svg.hashsalt``; the SVG keeps the PNG's layout, where savefig would lay it out again at
+    72 dpi and move the axes by a fraction of a point)."""
+    import gnibench.reports.figures as figs
+    from gnibench.suite.cli.main import main
+
+    assert main(["reproduce", "hlw-fig-1.4", "--scale", "quick", "-o", str(tmp_path), "-j", "1",
+                 "--no-report"]) == 0
+    results = tmp_path / "hlw-fig-1.4"
+
+    def images(out):
+        figs.draw_figure(results, out)
+        return {ext: (out / f"hlw-fig-1.4.{ext}").read_bytes() for ext in ("png", "svg")}
+
+    once, again = images(tmp_path / "a"), images(tmp_path / "b")
+    assert once == again
+    monkeypatch.setattr(figs, "_lay_out_once", lambda fig: None)   # savefig's own layout runs
+    assert images(tmp_path / "c")["png"] == once["png"]
