@@ -1,11 +1,13 @@
 """Explicit Runge-Kutta steps both ways (issue 19: coefficients as run-time data or as constants).
 
-The written-out step of gnibench's kernels (``methods/explicit_rk.py``: stages unrolled, the
-tableau's doubles as literals, zero entries left out) against one generic step that reads the
-tableau at run time (the non-zero entries of each row of A and of b in arrays), which a single
-compiled kernel per problem could share across every explicit method. Both call the same field
-``f`` of the same cell module, on kepler-2d (e = 0.6), in the same bare loop of 200 000 steps;
-printed: ns per step (best of 15) and the final states' largest difference.
+Both compute the explicit Runge-Kutta step of [HLW] II.1.1 (Def. 1.1), k_i = f(y + h Σ_j a_ij k_j),
+y1 = y + h Σ_i b_i k_i (Euler, [HLW] (1.5), is its one-stage case): the written-out step of
+gnibench's kernels (``methods/explicit_rk.py``: stages unrolled, the tableau's doubles as literals,
+zero entries left out) against one generic step that reads the tableau at run time (the non-zero
+entries of each row of A and of b in arrays), which a single compiled kernel per problem could share
+across every explicit method. Both call the same field ``f`` of the same cell module, on kepler-2d
+(e = 0.6), in the same bare loop of 200 000 steps; printed: ns per step (best of 15) and the final
+states' largest difference.
 
 Run: ``python benchmarks/generic_tableau.py`` (a measurement, not a test).
 """

@@ -120,3 +120,23 @@ def test_images_are_those_of_matplotlibs_own_layout_and_the_same_bytes_each_time
     assert once == again
     monkeypatch.setattr(figs, "_lay_out_once", lambda fig: None)   # savefig's own layout runs
     assert images(tmp_path / "c")["png"] == once["png"]
+
+
+def test_legend_samples_of_point_sets_are_legible():
+    """A point set drawn as 0.6-point pixels ([B] Figs 26-29: thousands of crossings) gets a
+    legend sample of LEGEND_MARKER points; the points themselves keep their size."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from gnibench.reports.figures.plot import LEGEND_MARKER, LINE, legible_markers
+
+    fig, ax = plt.subplots()
+    (points,) = ax.plot([0, 1], [0, 1], label="crossings", **LINE["pixels"])
+    ax.plot([0, 1], [1, 0], label="orbit", **LINE["line"])
+    legend = ax.legend()
+    legible_markers(legend)
+    sample, line = legend.legend_handles
+    assert sample.get_markersize() == LEGEND_MARKER and points.get_markersize() == 0.6
+    assert line.get_marker() in (None, "None", "")
+    plt.close(fig)

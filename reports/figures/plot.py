@@ -71,9 +71,22 @@ def draw_plot(results, figure: dict):
         if panel.get("zoom") and panel["zoom"]["mark"]:
             _mark(axes[panel["zoom"]["of"]], panel, k)
     if outside:
-        fig.legend(list(outside.values()), list(outside), loc="outside lower center",
-                   ncols=min(len(outside), 4))
+        legible_markers(fig.legend(list(outside.values()), list(outside),
+                                   loc="outside lower center", ncols=min(len(outside), 4)))
     return fig, manifest
+
+
+#: the least marker size (points) of a legend's sample: the "pixels" and "dots" of a point set
+#: (0.6 and 2 points, right for thousands of crossings) were invisible in their legend entry
+LEGEND_MARKER = 4.0
+
+
+def legible_markers(legend) -> None:
+    """Enlarge the markers of a legend's samples to :data:`LEGEND_MARKER` points at least (the
+    curves themselves keep their size)."""
+    for handle in legend.legend_handles:
+        if hasattr(handle, "get_markersize") and handle.get_marker() not in (None, "None", ""):
+            handle.set_markersize(max(handle.get_markersize(), LEGEND_MARKER))
 
 
 def _draw_panel(ax, results, source: dict, source_index: int, panel: dict) -> dict:
@@ -99,7 +112,7 @@ def _draw_panel(ax, results, source: dict, source_index: int, panel: dict) -> di
         ax.set_aspect("equal", adjustable="datalim" if not (panel["xlim"] and panel["ylim"])
                       else "box")
     if panel["legend"] not in ("none", "outside") and ax.get_legend_handles_labels()[0]:
-        ax.legend(loc=panel["legend"])
+        legible_markers(ax.legend(loc=panel["legend"]))
     # what the axes really carry (read back from matplotlib, for the manifest and the tests)
     entry.update(xlabel=ax.get_xlabel(), ylabel=ax.get_ylabel(), xscale=ax.get_xscale(),
                  yscale=ax.get_yscale(), title=ax.get_title(),
