@@ -8,6 +8,7 @@ import json
 import numpy as np
 import pandas as pd
 import pytest
+from gnibench.reports.figures.plot import LINE, pixel_size
 from gnibench.suite.cli.main import main
 from gnibench.suite.foundation.errors import UserError
 from gnibench.suite.ledger.closed_forms_b7 import so4_growth, so4_overlap, so4_plateau
@@ -64,6 +65,8 @@ def test_fig_26_draws_the_points_of_chart_1_only(figures):
         n = int(cells["section_points_chart1"][cell])
         assert curve["points"] == n < int(cells["section_points"][cell])  # not thinned, filtered
         assert f"{n} points in Γ1" in curve["label"]
+        # a quick-scale cloud (thousands of crossings, not the seed's 140 000) is drawn larger
+        assert curve["markersize"] == pixel_size(n) > LINE["pixels"]["markersize"]
 
 
 def test_fig_31_records_its_random_start(figures):

@@ -140,3 +140,18 @@ def test_legend_samples_of_point_sets_are_legible():
     assert sample.get_markersize() == LEGEND_MARKER and points.get_markersize() == 0.6
     assert line.get_marker() in (None, "None", "")
     plt.close(fig)
+
+
+def test_pixel_clouds_keep_their_ink_whatever_their_size():
+    """"pixels" are 0.6 points for the seeds' 140 000 crossings and for more; a smaller cloud
+    gets larger markers, about the same ink (size² × points), up to the 2 points of "dots"."""
+    from gnibench.reports.figures.plot import LINE, PIXEL_CROWD, PIXEL_LARGEST, pixel_size
+
+    smallest = LINE["pixels"]["markersize"]
+    assert pixel_size(PIXEL_CROWD) == smallest == pixel_size(10 * PIXEL_CROWD) == 0.6
+    assert pixel_size(0) == pixel_size(100) == PIXEL_LARGEST == LINE["dots"]["markersize"]
+    for n in (20_000, 50_000, 100_000):
+        assert pixel_size(n) ** 2 * n == pytest.approx(smallest ** 2 * PIXEL_CROWD)
+    sizes = [pixel_size(n) for n in (500, 3_000, 15_000, 60_000, 140_000)]
+    assert sizes == sorted(sizes, reverse=True)
+

@@ -31,6 +31,16 @@ LINE = {"line": {"linestyle": "-", "marker": None},
         "pixels": {"linestyle": "none", "marker": ".", "markersize": 0.6, "markeredgewidth": 0}}
 #: styles of unconnected points: never thinned (the density of a section trace is the picture)
 POINT_CLOUDS = ("dots", "points", "pixels")
+#: "pixels" are 0.6 points wide for the seeds' ~140 000 crossings ([B] Figs 26-29); a cloud of
+#: fewer points (the quick scale's 2-4 thousand) keeps about the same ink: the marker grows as
+#: sqrt(PIXEL_CROWD / n), up to the 2 points of "dots"
+PIXEL_CROWD, PIXEL_LARGEST = 140_000, 2.0
+
+
+def pixel_size(points: int) -> float:
+    """The marker size (points) of a "pixels" cloud of ``points`` points."""
+    smallest = LINE["pixels"]["markersize"]
+    return min(PIXEL_LARGEST, max(smallest, smallest * math.sqrt(PIXEL_CROWD / max(points, 1))))
 
 
 def figure_size(figure: dict) -> tuple[float, float]:
@@ -150,6 +160,8 @@ def _draw_curve(ax, results, curve: dict, logx: bool, logy: bool) -> dict:
         if curve.get("xwrap") or curve.get("ywrap"):
             x, y = wrap(x, y, curve.get("xwrap"), curve.get("ywrap"))
         style = {"linewidth": curve.get("linewidth", 1.2), **style}
+        if curve["style"] == "pixels":
+            style["markersize"] = out["markersize"] = pixel_size(int(ok.sum()))
         if curve.get("pieces"):
             x, y, origins = _pieces(x, y)
             out["pieces"] = len(origins)
