@@ -210,11 +210,22 @@ def _printer():
     return Printer({"fully_qualified_modules": True, "standard": "python3"})
 
 
+def _cse_steps(kind: str):
+    """sympy's cse preprocessing: its "basic" steps (signs canonical, then ``factor_terms``) for
+    the field, the integrals and the sections; the Jacobian without ``factor_terms``, which took
+    2.0 of the 4.6 s the outer solar system's code costs (its 1296 entries) and leaves it with 380
+    multiplications instead of 705 and 36 divisions instead of 51 (measured 2026-11-28)."""
+    from sympy.simplify import cse_opts
+
+    return [(cse_opts.sub_pre, cse_opts.sub_post)] if kind == "matrix" else "basic"
+
+
 def _function(name, ys, ps, exprs, kind, shape=None, comment=None):
     import sympy as sp
 
     printer = _printer()
-    subs, reduced = sp.cse(exprs, symbols=sp.numbered_symbols("t_"), optimizations="basic")
+    subs, reduced = sp.cse(exprs, symbols=sp.numbered_symbols("t_"),
+                           optimizations=_cse_steps(kind))
     args = "y, par, M" if kind == "matrix" else "y, par"
     lines = ["", "@njit(cache=True)", f"def {name}({args}):"]
     if comment:
