@@ -25,10 +25,11 @@ Resuming: running the same command again reuses every stored cell whose key matc
 and versions; :func:`gnibench.suite.runs.store.cell_key`) and that did not end in ``error``, and
 computes only the others; ``fresh`` ignores the store. An experiment's consolidated tables are
 rewritten after one of its cells finishes whenever the time since their last write (or the
-start) is at least ``FLUSH_SECONDS`` and ``FLUSH_RATIO`` times what that write took (so that a
-short run writes its tables once, and a run over many experiments, e.g. ``gnibench reproduce
-all``, does not rewrite the tables of the experiments whose cells are not running), at the end,
-and on Ctrl-C; unfinished cells appear with status ``pending`` and ``complete: false``.
+start) is at least ``FLUSH_SECONDS`` and ``FLUSH_RATIO`` times what the last writes of all the
+run's experiments took together (so that a short run writes its tables once, a run over many
+experiments, e.g. ``gnibench reproduce all``, does not rewrite the tables of the experiments whose
+cells are not running, and the writing takes at most about a tenth of the run's time however many
+experiments it holds), at the end, and on Ctrl-C; unfinished cells appear with status ``pending`` and ``complete: false``.
 
 A cell that raises (anything but a KeyboardInterrupt) gets status ``error`` with the exception
 type and message as reason, and the run goes on. Bad input never reaches this point: the whole
@@ -143,7 +144,8 @@ def run_experiments(experiments: list[Experiment], outs: list[Path], store_root:
         writers: list[Consolidator] = []
         try:
             with contextlib.closing(outcomes):      # an error stops the workers at once
-                writers += [Consolidator(e, store, out, summarize, k)
+                costs: dict = {}
+                writers += [Consolidator(e, store, out, summarize, k, costs)
                             for e, out, k in zip(experiments, outs, keys)]
                 for outcome in outcomes:
                     key = key_of.get(id(outcome.cell)) or cell_key(outcome.cell)
@@ -206,7 +208,7 @@ class Consolidator:
     """Writes the consolidated tables (and the summary) from the stored parts."""
 
     def __init__(self, experiment: Experiment, store: Store, out: Path, summarize=None,
-                 keys: dict | None = None):
+                 keys: dict | None = None, costs: dict | None = None):
         from gnibench.suite.runs.tables import samples_table
 
         self.experiment, self.store, self.out, self.summarize = experiment, store, out, summarize
@@ -216,12 +218,14 @@ class Consolidator:
         self.state_names = experiment_states(experiment)
         self.empty_samples = samples_table([])
         self.last_write, self.write_cost = time.perf_counter(), 0.0
+        # what the last write of each experiment of the run took (shared by the run's writers)
+        self.costs = {} if costs is None else costs
         figure = experiment.figure or {}
         self.fields_due = any(p.get("fields") for p in figure.get("panels", []))
 
     def due(self) -> bool:
-        return time.perf_counter() - self.last_write >= max(FLUSH_SECONDS,
-                                                             FLUSH_RATIO * self.write_cost)
+        spent = sum(self.costs.values())
+        return time.perf_counter() - self.last_write >= max(FLUSH_SECONDS, FLUSH_RATIO * spent)
 
     def flush(self, done: set) -> None:
         from gnibench.suite.metrics.families import family_columns
@@ -263,7 +267,7 @@ class Consolidator:
             text = self.summarize(meta, cells_df, timings_df)
             atomic_write(out / "summary.md", lambda p: Path(p).write_text(text, encoding="utf-8"))
         self.last_write = time.perf_counter()
-        self.write_cost = self.last_write - t0
+        self.write_cost = self.costs[id(self)] = self.last_write - t0
         self.dirty = False
 
 
