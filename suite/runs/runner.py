@@ -29,7 +29,8 @@ start) is at least ``FLUSH_SECONDS`` and ``FLUSH_RATIO`` times what the last wri
 run's experiments took together (so that a short run writes its tables once, a run over many
 experiments, e.g. ``gnibench reproduce all``, does not rewrite the tables of the experiments whose
 cells are not running, and the writing takes at most about a tenth of the run's time however many
-experiments it holds), at the end, and on Ctrl-C; unfinished cells appear with status ``pending`` and ``complete: false``.
+experiments it holds), at the end, and on Ctrl-C; unfinished cells appear with status
+``pending`` and ``complete: false``.
 
 A cell that raises (anything but a KeyboardInterrupt) gets status ``error`` with the exception
 type and message as reason, and the run goes on. Bad input never reaches this point: the whole
