@@ -154,4 +154,3 @@ def test_pixel_clouds_keep_their_ink_whatever_their_size():
         assert pixel_size(n) ** 2 * n == pytest.approx(smallest ** 2 * PIXEL_CROWD)
     sizes = [pixel_size(n) for n in (500, 3_000, 15_000, 60_000, 140_000)]
     assert sizes == sorted(sizes, reverse=True)
-

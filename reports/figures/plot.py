@@ -31,7 +31,7 @@ LINE = {"line": {"linestyle": "-", "marker": None},
         "pixels": {"linestyle": "none", "marker": ".", "markersize": 0.6, "markeredgewidth": 0}}
 #: styles of unconnected points: never thinned (the density of a section trace is the picture)
 POINT_CLOUDS = ("dots", "points", "pixels")
-#: "pixels" are 0.6 points wide for the seeds' ~140 000 crossings ([B] Figs 26-29); a cloud of
+#: "pixels" are 0.6 points wide for the seeds' ~140 000 crossings ([B] Fig 26); a cloud of
 #: fewer points (the quick scale's 2-4 thousand) keeps about the same ink: the marker grows as
 #: sqrt(PIXEL_CROWD / n), up to the 2 points of "dots"
 PIXEL_CROWD, PIXEL_LARGEST = 140_000, 2.0
