@@ -204,3 +204,23 @@ def test_kernels_to_compile_come_first_the_costliest_first(monkeypatch):
              "f": ("k2", 100)}
     monkeypatch.setattr(runner, "kernel_plan", lambda cell: plans[cell])
     assert runner._groups(list("abcdef")) == [["d"], ["b", "f"], ["a", "c"], ["e"]]
+
+
+def test_tables_of_many_experiments_are_rewritten_within_one_shared_budget():
+    """An experiment's tables wait FLUSH_RATIO times what the last writes of all the run's
+    experiments took (at least FLUSH_SECONDS): 41 experiments each cheap to write do not keep the
+    main process rewriting tables while the workers compute."""
+    import time
+
+    from gnibench.suite.runs.runner import FLUSH_RATIO, FLUSH_SECONDS, Consolidator
+
+    costs: dict = {}
+    writers = [Consolidator.__new__(Consolidator) for _ in range(41)]
+    for w in writers:
+        w.costs, w.last_write = costs, time.perf_counter() - 1.5 * FLUSH_SECONDS
+    assert writers[0].due()                            # nothing written yet: FLUSH_SECONDS alone
+    costs[id(writers[0])] = 0.4 * FLUSH_SECONDS / FLUSH_RATIO
+    assert writers[0].due() and writers[1].due()       # its own cost alone would not hold it
+    for w in writers[1:]:                               # all 41 together: 16 FLUSH_SECONDS
+        costs[id(w)] = costs[id(writers[0])]
+    assert not writers[0].due() and not writers[1].due()

@@ -218,7 +218,7 @@ class Consolidator:
         self.dirty = False          # a cell of this experiment finished since the last write
         self.state_names = experiment_states(experiment)
         self.empty_samples = samples_table([])
-        self.last_write, self.write_cost = time.perf_counter(), 0.0
+        self.last_write = time.perf_counter()
         # what the last write of each experiment of the run took (shared by the run's writers)
         self.costs = {} if costs is None else costs
         figure = experiment.figure or {}
@@ -268,7 +268,7 @@ class Consolidator:
             text = self.summarize(meta, cells_df, timings_df)
             atomic_write(out / "summary.md", lambda p: Path(p).write_text(text, encoding="utf-8"))
         self.last_write = time.perf_counter()
-        self.write_cost = self.costs[id(self)] = self.last_write - t0
+        self.costs[id(self)] = self.last_write - t0
         self.dirty = False
 
 
