@@ -209,3 +209,24 @@ def test_warm_run_reads_the_generated_text_from_disk(monkeypatch):
 
     monkeypatch.setattr(generating_function, "_generate", no_sympy)
     assert generating_function.generating_code(problem) == text
+
+
+def test_step_jacobian_is_the_derivative_of_the_momentum_equation():
+    """maps(): the Jacobian, built from the second derivatives of each G_k, is d p_i / d P_j of
+    the momentum equation it returns (exactly, for a non-separable H of two degrees of freedom),
+    and p, Q are P + Σ h^k dG_k/dq, q + Σ h^k dG_k/dP."""
+    import sympy as sp
+    from gnibench.methods.generating_function import maps
+
+    q1, q2, P1, P2, h = sp.symbols("q1 q2 P1 P2 h")
+    q, P = [q1, q2], [P1, P2]
+    H = P1**2 / 2 + (1 + q1**2) * P2**2 / 2 + q2 * P1 * P2 + q1**3 * q2 + sp.sin(q2) * P1
+    G = generating_terms(H, q, P)
+    momentum, position, jacobian = maps(G, q, P, h)
+    for i in range(2):
+        assert sp.expand(momentum[i] - P[i]
+                         - sum(h ** (k + 1) * sp.diff(g, q[i]) for k, g in enumerate(G))) == 0
+        assert sp.expand(position[i] - q[i]
+                         - sum(h ** (k + 1) * sp.diff(g, P[i]) for k, g in enumerate(G))) == 0
+        for j in range(2):
+            assert sp.expand(jacobian[i][j] - sp.diff(momentum[i], P[j])) == 0, (i, j)
