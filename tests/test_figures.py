@@ -58,6 +58,57 @@ def test_pieces_break_a_line_at_its_jumps():
     assert xs[origins].tolist() == [0.0, 5.0, 0.0]
 
 
+def _thin_by_buckets(x, y, limit, logx=False):
+    """thin() as first written: a loop over the buckets with nanargmin and nanargmax."""
+    n, nb = len(x), limit // 2
+    if n <= limit:
+        return x, y
+    pos = np.log(np.where(x > 0, x, np.nan)) if logx else x.astype(float)
+    ok = np.isfinite(pos)
+    if ok.sum() > 1 and np.all(np.diff(pos[ok]) >= 0):
+        edges = np.linspace(pos[ok][0], pos[ok][-1], nb + 1)
+        bucket = np.where(ok, np.clip(np.searchsorted(edges, pos, side="right") - 1, 0, nb - 1),
+                          -1)
+        starts = np.flatnonzero(np.diff(np.concatenate([[-2], bucket])) != 0)
+        buckets = np.split(np.arange(n), starts[1:])
+    else:
+        buckets = np.array_split(np.arange(n), nb)
+    keep = [0, n - 1]
+    finite = np.where(np.isfinite(y), y, np.nan)
+    for b in buckets:
+        part = finite[b]
+        if np.all(np.isnan(part)):
+            keep.append(int(b[0]))
+            continue
+        keep += [int(b[np.nanargmin(part)]), int(b[np.nanargmax(part)])]
+    idx = np.unique(keep)
+    return x[idx], y[idx]
+
+
+@pytest.mark.parametrize("case", range(12))
+def test_thinning_keeps_each_buckets_first_extremes(case):
+    """thin() keeps the same samples as the loop over buckets it replaced: time series (with
+    non-finite x, on log x) and curves whose x goes back, y with ties, NaN, inf and all-NaN
+    buckets."""
+    from gnibench.reports.figures.data import thin
+
+    rng = np.random.default_rng(case)
+    n = int(rng.integers(50, 3000))
+    x = np.cumsum(rng.exponential(1.0, n)) if case % 3 else rng.normal(size=n)
+    y = np.round(rng.normal(size=n), 1 if case % 2 else 6)          # ties when rounded
+    y[rng.random(n) < 0.05] = np.nan
+    y[rng.random(n) < 0.02] = np.inf * rng.choice([-1, 1])
+    y[n // 3:n // 3 + 40] = np.nan                                  # whole buckets without y
+    if case % 4 == 1:
+        x[rng.random(n) < 0.03] = np.nan
+    logx = case % 5 == 2
+    limit = int(rng.integers(10, 200))
+    got, want = thin(x, y, limit, logx), _thin_by_buckets(x, y, limit, logx)
+    np.testing.assert_array_equal(got[0], want[0])
+    np.testing.assert_array_equal(got[1], want[1])
+    assert len(got[0]) < n
+
+
 def test_domain_field_is_the_octagon():
     """min_k g_k of geodesic-genus2's sides ([B] §8.1): positive inside Ω, zero on a side (the
     circle of centre C e_0, radius sqrt(C² − 1), crosses the q1 axis at C − sqrt(C² − 1)),
@@ -120,6 +171,46 @@ def test_images_are_those_of_matplotlibs_own_layout_and_the_same_bytes_each_time
     assert once == again
     monkeypatch.setattr(figs, "_lay_out_once", lambda fig: None)   # savefig's own layout runs
     assert images(tmp_path / "c")["png"] == once["png"]
+
+
+def test_titles_over_log_axes_are_where_matplotlib_would_measure_them_to_be(tmp_path,
+                                                                           monkeypatch):
+    """A panel with a log y axis gets its title at y = 1 without matplotlib's measuring of the
+    tick labels (reports/figures/plot.py): the PNG is byte for byte the one drawn with the
+    title placed by matplotlib; on linear y axes matplotlib still places it."""
+    import copy
+
+    import gnibench.reports.figures as figs
+    from gnibench.reports.figures.data import Results
+    from gnibench.suite.cli.main import main
+    from matplotlib.axes import Axes
+
+    assert main(["reproduce", "hlw-fig-1.4", "--scale", "quick", "-o", str(tmp_path), "-j", "1",
+                 "--no-report"]) == 0
+    results = tmp_path / "hlw-fig-1.4"
+    figure = copy.deepcopy(Results.read(results).figure)
+    for panel in figure["panels"]:
+        panel.update(yscale="log", ylim=None)
+    assert all(panel["title"] for panel in figure["panels"])
+    placed = []
+    set_title = Axes.set_title
+
+    def spy(ax, label, *args, **kw):
+        placed.append(kw.get("y"))
+        return set_title(ax, label, *args, **kw)
+
+    monkeypatch.setattr(Axes, "set_title", spy)
+    figs.draw_figure(results, tmp_path / "a", figure=figure)
+    assert placed and set(placed) == {1.0}
+    monkeypatch.setattr(Axes, "set_title", lambda ax, label, *a, y=None, **kw:
+                        set_title(ax, label, *a, **kw))     # matplotlib measures and places
+    figs.draw_figure(results, tmp_path / "b", figure=figure)
+    assert (tmp_path / "a" / "hlw-fig-1.4.png").read_bytes() \
+        == (tmp_path / "b" / "hlw-fig-1.4.png").read_bytes()
+    placed.clear()
+    monkeypatch.setattr(Axes, "set_title", spy)
+    figs.draw_figure(results, tmp_path / "c")          # the figure's own linear axes
+    assert placed and set(placed) == {None}
 
 
 def test_legend_samples_of_point_sets_are_legible():

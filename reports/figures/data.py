@@ -128,19 +128,19 @@ def thin(x: np.ndarray, y: np.ndarray, limit: int = MAX_DRAWN,
         edges = np.linspace(pos[ok][0], pos[ok][-1], nb + 1)
         bucket = np.where(ok, np.clip(np.searchsorted(edges, pos, side="right") - 1, 0, nb - 1),
                           -1)
-        starts = np.flatnonzero(np.diff(np.concatenate([[-2], bucket])) != 0)
-        buckets = np.split(np.arange(n), starts[1:])
+        run = np.cumsum(np.diff(np.concatenate([[-2], bucket])) != 0) - 1
     else:
-        buckets = np.array_split(np.arange(n), nb)
-    keep = [0, n - 1]
+        sizes = np.full(nb, n // nb)
+        sizes[:n % nb] += 1                      # np.array_split's buckets
+        run = np.repeat(np.arange(nb), sizes)
+    # per run of samples, the first smallest and the first largest finite y (the first sample
+    # when it has none): one sort by (run, y, index) each, NaN last within a run
     finite = np.where(np.isfinite(y), y, np.nan)
-    for b in buckets:
-        part = finite[b]
-        if np.all(np.isnan(part)):
-            keep.append(int(b[0]))
-            continue
-        keep += [int(b[np.nanargmin(part)]), int(b[np.nanargmax(part)])]
-    idx = np.unique(keep)
+    index = np.arange(n)
+    first = np.flatnonzero(np.diff(np.concatenate([[-1], run])) != 0)
+    lowest = np.lexsort((index, finite, run))[first]
+    highest = np.lexsort((index, -finite, run))[first]
+    idx = np.unique(np.concatenate([[0, n - 1], lowest, highest]))
     return x[idx], y[idx]
 
 

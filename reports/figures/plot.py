@@ -109,7 +109,10 @@ def _draw_panel(ax, results, source: dict, source_index: int, panel: dict) -> di
         entry["fields"].append(_draw_field(ax, results.field(source_index, k), field))
     for curve in source.get("curves", []):
         entry["curves"].append(_draw_curve(ax, results, curve, logx, logy))
-    ax.set_title(panel["title"])
+    # a log y axis has no offset text (the one thing, with tick labels above the axes, that
+    # matplotlib measures every tick label of the axes to place a title clear of): the title
+    # goes at the top of the axes unmeasured, where matplotlib would put it
+    ax.set_title(panel["title"], y=1.0 if logy else None)
     ax.set_xlabel(panel["xlabel"])
     ax.set_ylabel(panel["ylabel"])
     ax.set_xscale(panel["xscale"])
