@@ -17,7 +17,9 @@ starts the drawing process before it prepares the pages when figures will probab
 (:func:`likely_to_draw`: an image directory without manifest, or older than its results' tables),
 and ``gnibench run`` before the cells run. Without one, the figures are drawn in this process, or
 by a drawing process started then when there are at least :data:`PARALLEL_MIN` of them and more
-than one core, largest first.
+than one core, largest first. ``gnibench reproduce`` draws the seeds' figures by the same
+workers (:meth:`Drawers.map`) before the report's, from a drawing process started before the
+cells run, which has imported the figures' modules meanwhile.
 """
 from __future__ import annotations
 
@@ -73,7 +75,8 @@ def _reusable(job: Job, manifest: dict) -> bool:
     return False
 
 
-def _cpus() -> int:
+def cores() -> int:
+    """The cores this process may run on."""
     try:
         return len(os.sched_getaffinity(0))
     except AttributeError:                       # not on Linux
@@ -82,9 +85,12 @@ def _cpus() -> int:
 
 # -- the drawing process ----------------------------------------------------------------------
 
-def _serve(conn, parent: int, workers: int) -> None:
-    """The drawing process: import matplotlib, then draw what comes ("draw", plot, path) by
-    ``workers`` processes forked from this one; ("wait",) answers None or the failures."""
+def _serve(conn, parent: int, workers: int, preload: tuple = ()) -> None:
+    """The drawing process: import matplotlib (and the modules ``preload`` names), then draw
+    what comes ("draw", plot, path) by ``workers`` processes forked from this one; ("wait",)
+    answers None or the failures; ("map", fn, argument tuples) answers ("ok", results in order)
+    or the first failure."""
+    import importlib
     import multiprocessing as mp
     import traceback
     from concurrent.futures import ProcessPoolExecutor
@@ -94,6 +100,8 @@ def _serve(conn, parent: int, workers: int) -> None:
     from matplotlib.backends import backend_agg  # noqa: F401
     from matplotlib.figure import Figure  # noqa: F401
 
+    for name in preload:
+        importlib.import_module(name)
     font_manager.findfont("DejaVu Sans")           # the font list read once, before the forks
     # what this process holds now (the command's objects, forked, and matplotlib) lives until it
     # ends: frozen for the cyclic garbage collector, so that the full collections of the drawing
@@ -107,11 +115,18 @@ def _serve(conn, parent: int, workers: int) -> None:
                 message = conn.recv()
             except (EOFError, OSError):
                 return
+            if message[0] in ("draw", "map") and pool is None:
+                pool = ProcessPoolExecutor(workers, mp_context=mp.get_context("fork"),
+                                           initializer=quiet_worker, initargs=(os.getpid(),))
             if message[0] == "draw":
-                if pool is None:
-                    pool = ProcessPoolExecutor(workers, mp_context=mp.get_context("fork"),
-                                               initializer=quiet_worker, initargs=(os.getpid(),))
                 futures.append((pool.submit(render, *message[1:]), message[2]))
+            elif message[0] == "map":
+                done = [pool.submit(message[1], *args) for args in message[2]]
+                failed = next((f.exception() for f in done if f.exception() is not None), None)
+                conn.send(("ok", [f.result() for f in done]) if failed is None else
+                          ("fault", failed.errno, failed.strerror, failed.filename or "a figure")
+                          if isinstance(failed, OSError) else
+                          ("error", "".join(traceback.format_exception(failed))))
             elif message[0] == "wait":
                 failed = [(f.exception(), path) for f, path in futures
                           if f.exception() is not None]
@@ -143,15 +158,17 @@ class Drawers:
     def __init__(self):
         self.process, self.conn, self.local = None, None, []
 
-    def start(self, workers: int | None = None) -> Drawers:
-        """Fork the drawing process now (if there is more than one core)."""
+    def start(self, workers: int | None = None, preload: tuple = ()) -> Drawers:
+        """Fork the drawing process now (if there is more than one worker to give it: by default
+        one per core); it imports matplotlib and the modules named in ``preload`` before it forks
+        its workers."""
         import multiprocessing as mp
 
-        workers = _cpus() if workers is None else workers
+        workers = cores() if workers is None else workers
         if self.process is None and workers >= 2 and "fork" in mp.get_all_start_methods():
             ctx = mp.get_context("fork")
             self.conn, child = ctx.Pipe()
-            self.process = ctx.Process(target=_serve, args=(child, os.getpid(), workers),
+            self.process = ctx.Process(target=_serve, args=(child, os.getpid(), workers, preload),
                                        name="gnibench-drawing")
             self.process.start()
             child.close()
@@ -162,6 +179,29 @@ class Drawers:
             self.local.append(job)
         else:
             self._send(("draw", job.plot, job.path))
+
+    def map(self, fn, args: list[tuple], cost=None) -> list:
+        """``fn(*a)`` for each ``a`` of ``args`` (``fn`` a module-level function), by the drawing
+        process's workers, the costliest first (``cost(a)``), or here in order when there is no
+        drawing process; the results in the order of ``args``. A failure raises here: an
+        ``OSError`` as a one-line Fault, anything else with its traceback."""
+        if self.process is None:
+            return [fn(*a) for a in args]
+        order = sorted(range(len(args)), key=lambda i: -cost(args[i])) if cost else \
+            list(range(len(args)))
+        self._send(("map", fn, [args[i] for i in order]))
+        try:
+            reply = self.conn.recv()
+        except (EOFError, OSError) as e:
+            raise RuntimeError(f"the drawing process ended unexpectedly ({e})") from None
+        if reply[0] == "fault":
+            raise _fault(*reply[1:])
+        if reply[0] == "error":
+            raise RuntimeError(f"drawing failed:\n{reply[1]}")
+        results = [None] * len(args)
+        for i, result in zip(order, reply[1]):
+            results[i] = result
+        return results
 
     def _send(self, message) -> None:
         try:

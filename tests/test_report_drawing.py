@@ -62,7 +62,7 @@ def serial_count(monkeypatch):
         count["n"] += 1
         real(plot, path)
 
-    monkeypatch.setattr(drawing, "_cpus", lambda: 1)
+    monkeypatch.setattr(drawing, "cores", lambda: 1)
     monkeypatch.setattr(drawing, "render", render)
     return count
 
@@ -99,9 +99,9 @@ def test_cache_reuses_verifies_and_removes_stale_files(tmp_path, serial_count, c
 
 def test_parallel_drawing_gives_the_serial_files(tmp_path, monkeypatch):
     plots = [small_plot(1.0), small_plot(2.0, colour="#D55E00"), small_plot(3.0, log=False)]
-    monkeypatch.setattr(drawing, "_cpus", lambda: 2)
+    monkeypatch.setattr(drawing, "cores", lambda: 2)
     draw([Job(p, tmp_path / "par" / f"{i}.png") for i, p in enumerate(plots)])
-    monkeypatch.setattr(drawing, "_cpus", lambda: 1)
+    monkeypatch.setattr(drawing, "cores", lambda: 1)
     draw([Job(p, tmp_path / "ser" / f"{i}.png") for i, p in enumerate(plots)])
     for i in range(3):
         assert (tmp_path / "par" / f"{i}.png").read_bytes() == \
@@ -235,3 +235,37 @@ def test_the_advance_widths_are_the_fonts():
         font.set_text(chr(code))
         widths.append(round(font.get_width_height()[0] / 64))
     assert tuple(widths) == ADVANCE
+
+
+def _square_or_fail(x):
+    """For test_map: x² in a drawing worker, with its pid; ValueError at -1, OSError at -2."""
+    if x == -1:
+        raise ValueError("no square today")
+    if x == -2:
+        raise OSError(28, "No space left on device", "fig.png")
+    return x * x, os.getpid()
+
+
+def test_map_gives_the_results_in_order_from_the_workers_costliest_first(tmp_path):
+    """Drawers.map (the seeds' figures in gnibench reproduce): fn runs in the drawing process's
+    workers, the costliest argument first, and the results come back in the order of the
+    arguments; a failure raises here (an OSError as a one-line Fault); without a drawing process
+    fn runs in this process."""
+    from gnibench.suite.foundation.outputs import Fault
+
+    args = [(x,) for x in (3, 1, 4, 1, 5, 9, 2, 6)]
+    with Drawers().start(2) as drawers:
+        sent, send = [], drawers._send
+        drawers._send = lambda message: (sent.append(message), send(message))
+        results = drawers.map(_square_or_fail, args, cost=lambda a: a[0])
+        assert [a[0] for a in sent[0][2]] == sorted((x for (x,) in args), reverse=True)
+        assert [r[0] for r in results] == [x * x for (x,) in args]
+        assert os.getpid() not in {r[1] for r in results}
+        with pytest.raises(RuntimeError, match="no square today"):
+            drawers.map(_square_or_fail, [(2,), (-1,)])
+        with pytest.raises(Fault, match="No space left on device"):
+            drawers.map(_square_or_fail, [(-2,)])
+        assert [r[0] for r in drawers.map(_square_or_fail, [(7,)])] == [49]   # still serving
+    here = Drawers().map(_square_or_fail, args)
+    assert [r for r, pid in here] == [x * x for (x,) in args]
+    assert {pid for _, pid in here} == {os.getpid()}

@@ -47,8 +47,10 @@ def run(a) -> int:
         print(list_text(rep.listing()))
         return 0
     out = a.output if a.output is not None else rep.DEFAULT_DIR
+    from gnibench.reports.drawing import Drawers, cores
+
+    ids = rep.choose(a.ids)             # an unknown id is refused before anything starts
     if a.redraw:
-        ids = rep.choose(a.ids)
         for option in ("jobs", "scheduler"):
             if getattr(a, option) is not None:
                 raise UserError(f"--{option} does not apply with --redraw (nothing is run)")
@@ -58,6 +60,24 @@ def run(a) -> int:
         if missing:
             raise UserError(f"no results for {', '.join(missing)} in {out}; run gnibench "
                             f"reproduce {' '.join(missing)} first (without --redraw)")
+    with Drawers() as drawers:
+        # the figures and the report's plots are drawn by one pool, forked from a process that
+        # imports what they need while the cells are prepared and run (-j 1: in this process)
+        if a.jobs != 1:
+            drawers.start(min(a.jobs or cores(), cores()), preload=FIGURE_MODULES)
+        return _reproduce(a, out, drawers)
+
+
+#: what drawing a figure imports (the drawing process imports them once, before its forks)
+FIGURE_MODULES = ("pandas", "pyarrow.parquet", "matplotlib.pyplot", "gnibench.reports.figures",
+                  "gnibench.reports.figures.plot", "gnibench.reports.figures.table")
+
+
+def _reproduce(a, out: Path, drawers) -> int:
+    from gnibench.suite.runs import reproduce as rep
+
+    if a.redraw:
+        ids = rep.choose(a.ids)
         dirs = [out / fid for fid in ids]
         figures = [rep.current_figure(fid, d) for fid, d in zip(ids, dirs)]
     else:
@@ -67,11 +87,11 @@ def run(a) -> int:
         dirs = rep.run_figures(experiments, out, jobs=a.jobs, executor=a.executor,
                                scheduler=a.scheduler, fresh=a.fresh, summarize=render_summary)
         figures = [e.figure for e in experiments]
-    draw_all(dirs, figures, jobs=None if a.redraw else a.jobs)
+    draw_all(dirs, figures, drawers=drawers)
     if not a.no_report:                 # everything in DIR (figures, a ledger of verify), as a site
         from gnibench.reports.site import build_site
 
-        index = build_site([out], out / "report")
+        index = build_site([out], out / "report", drawers=drawers)
         print(f"gnibench: reproduce: report {index}", file=sys.stderr)
     return 0
 
@@ -86,23 +106,17 @@ def _draw(d: Path, figure: dict | None):
 
 
 def draw_all(dirs: list[Path], figures: list[dict] | None = None, log=None,
-             jobs: int | None = None) -> list[dict]:
+             drawers=None) -> list[dict]:
     """Draw the figure of each results directory (``figures``: the figure to draw from each, by
-    default the one stored with its tables), in ``jobs`` processes (default: the number of
-    cores; drawing is independent per figure and reads tables only); one line per figure on
-    ``log``, in order."""
-    import os
+    default the one stored with its tables), by the workers of ``drawers`` (a started
+    :class:`~gnibench.reports.drawing.Drawers`; drawing is independent per figure and reads
+    tables only), the largest tables first, or in this process; one line per figure on ``log``,
+    in order."""
+    from gnibench.reports.drawing import Drawers
 
     log = sys.stderr if log is None else log
     figures = figures or [None] * len(dirs)
-    jobs = min(jobs or os.cpu_count() or 1, len(dirs))
-    if jobs > 1:
-        from gnibench.suite.foundation.processes import pool as process_pool
-
-        with process_pool(jobs) as pool:       # Ctrl-C stops the workers at once
-            results = list(pool.map(_draw, dirs, figures))
-    else:
-        results = [_draw(d, f) for d, f in zip(dirs, figures)]
+    results = (drawers or Drawers()).map(_draw, list(zip(dirs, figures)), cost=_size)
     manifests = []
     for d, manifest in zip(dirs, results):
         if isinstance(manifest, UserError):
@@ -113,6 +127,14 @@ def draw_all(dirs: list[Path], figures: list[dict] | None = None, log=None,
         print(f"gnibench: {manifest['number']} ({manifest['id']}, {manifest['scale']} scale) -> "
               f"{d / 'figure' / manifest['files'][0]}{warn}", file=log, flush=True)
     return manifests
+
+
+def _size(args) -> int:
+    """What drawing a figure costs, roughly: the size of its samples table."""
+    try:
+        return (Path(args[0]) / "samples.parquet").stat().st_size
+    except OSError:
+        return 0
 
 
 def list_text(rows: list[dict]) -> str:
