@@ -257,13 +257,17 @@ class Drawers:
 
 class Figures:
     """The figures of a site, as the pages describe them (``append`` a :class:`Job`): each is
-    reused or submitted to ``drawers`` at once; :meth:`finish` waits for them, removes the other
-    files of their directories and of ``dirs``, and writes the manifests."""
+    reused or submitted to ``drawers`` at once, and a figure with the description of one already
+    there or submitted (pages of experiments that share their cells) is copied from it instead of
+    drawn again; :meth:`finish` waits for them, makes the copies, removes the other files of their
+    directories and of ``dirs``, and writes the manifests."""
 
     def __init__(self, drawers: Drawers, dirs=()):
         self.drawers = drawers
         self.by_dir: dict[Path, list[Job]] = {Path(d): [] for d in dirs}
         self.manifests: dict[Path, dict] = {}
+        self.source: dict[str, Path] = {}          # a file that has (or will have) each key
+        self.copies: list[tuple[Path, Job]] = []
 
     def append(self, job: Job) -> None:
         job.key = job.key or plot_key(job.plot)
@@ -272,13 +276,26 @@ class Figures:
         if d not in self.manifests:
             d.mkdir(parents=True, exist_ok=True)
             self.manifests[d] = _read_manifest(d)
-        if not _reusable(job, self.manifests[d]):
+        if _reusable(job, self.manifests[d]):
+            self.source.setdefault(job.key, job.path)
+        elif job.key in self.source:
+            self.copies.append((self.source[job.key], job))
+        else:
+            self.source[job.key] = job.path
             self.drawers.submit(job)
 
     def finish(self) -> None:
+        import shutil
+
         from gnibench.suite.foundation.cache import atomic_write
 
         self.drawers.wait()
+        for source, job in self.copies:
+            if source != job.path:
+                try:
+                    atomic_write(job.path, lambda p, s=source: shutil.copyfile(s, p))
+                except OSError as e:
+                    raise _fault(e.errno, e.strerror, job.path) from None
         for d, jobs in self.by_dir.items():
             d.mkdir(parents=True, exist_ok=True)
             keep = {j.path.name for j in jobs}

@@ -269,3 +269,20 @@ def test_map_gives_the_results_in_order_from_the_workers_costliest_first(tmp_pat
     here = Drawers().map(_square_or_fail, args)
     assert [r for r, pid in here] == [x * x for (x,) in args]
     assert {pid for _, pid in here} == {os.getpid()}
+
+
+def test_a_figure_shared_by_two_pages_is_drawn_once_and_copied(tmp_path, serial_count):
+    """Pages of experiments that share their cells describe the same figure: it is drawn once,
+    the other page gets a copy (the same bytes, the same manifest entry); a changed one is drawn."""
+    a, b = tmp_path / "img" / "b-fig-26", tmp_path / "img" / "b-fig-27"
+    draw([Job(small_plot(1.0), a / "x.png"), Job(small_plot(1.0), b / "x.png"),
+          Job(small_plot(2.0), b / "y.png")])
+    assert serial_count["n"] == 2
+    assert (a / "x.png").read_bytes() == (b / "x.png").read_bytes()
+    ma, mb = (json.loads((d / MANIFEST).read_text()) for d in (a, b))
+    assert ma["x.png"] == mb["x.png"]
+    (a / "x.png").unlink()                             # reused where intact, copied from there
+    draw([Job(small_plot(1.0), b / "x.png"), Job(small_plot(1.0), a / "x.png")])
+    assert serial_count["n"] == 2 and (a / "x.png").read_bytes() == (b / "x.png").read_bytes()
+    draw([Job(small_plot(1.0), a / "x.png"), Job(small_plot(3.0), b / "x.png")])
+    assert serial_count["n"] == 3
