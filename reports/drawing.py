@@ -88,8 +88,9 @@ def cores() -> int:
 def _serve(conn, parent: int, workers: int, preload: tuple = ()) -> None:
     """The drawing process: import matplotlib (and the modules ``preload`` names), then draw
     what comes ("draw", plot, path) by ``workers`` processes forked from this one; ("wait",)
-    answers None or the failures; ("map", fn, argument tuples) answers ("ok", results in order)
-    or the first failure."""
+    answers ("ok", None) or the failures; ("map", fn, argument tuples) answers ("ok", results
+    in order) or the first failure. A failure is ("fault", errno, strerror, path) for an
+    ``OSError``, else ("error", traceback text)."""
     import importlib
     import multiprocessing as mp
     import traceback
@@ -133,8 +134,9 @@ def _serve(conn, parent: int, workers: int, preload: tuple = ()) -> None:
                 futures = []
                 faults = [(e.errno, e.strerror, str(path)) for e, path in failed
                           if isinstance(e, OSError)]
-                conn.send(("fault", *faults[0]) if faults else "\n".join(
-                    "".join(traceback.format_exception(e)) for e, _ in failed) or None)
+                conn.send(("fault", *faults[0]) if faults else ("error", "\n".join(
+                    "".join(traceback.format_exception(e)) for e, _ in failed))
+                    if failed else ("ok", None))
             else:
                 return
     finally:
@@ -190,6 +192,13 @@ class Drawers:
         order = sorted(range(len(args)), key=lambda i: -cost(args[i])) if cost else \
             list(range(len(args)))
         self._send(("map", fn, [args[i] for i in order]))
+        results = [None] * len(args)
+        for i, result in zip(order, self._reply()):
+            results[i] = result
+        return results
+
+    def _reply(self):
+        """The drawing process's answer: its value, or its failure raised here."""
         try:
             reply = self.conn.recv()
         except (EOFError, OSError) as e:
@@ -197,11 +206,8 @@ class Drawers:
         if reply[0] == "fault":
             raise _fault(*reply[1:])
         if reply[0] == "error":
-            raise RuntimeError(f"drawing failed:\n{reply[1]}")
-        results = [None] * len(args)
-        for i, result in zip(order, reply[1]):
-            results[i] = result
-        return results
+            raise RuntimeError(f"drawing a figure failed:\n{reply[1]}")
+        return reply[1]
 
     def _send(self, message) -> None:
         try:
@@ -224,14 +230,7 @@ class Drawers:
         for job in local:
             self.submit(job)
         self._send(("wait",))
-        try:
-            error = self.conn.recv()
-        except (EOFError, OSError) as e:
-            raise RuntimeError(f"the drawing process ended unexpectedly ({e})") from None
-        if isinstance(error, tuple):
-            raise _fault(*error[1:])
-        if error is not None:
-            raise RuntimeError(f"drawing a figure failed:\n{error}")
+        self._reply()
 
     def close(self, now: bool = False) -> None:
         if self.process is None:

@@ -149,19 +149,27 @@ def test_redraw_uses_the_tables_and_refuses_stale_ones(tmp_path, capsys, monkeyp
     assert "the cells of the file changed" in capsys.readouterr().err
 
 
-def test_images_are_those_of_matplotlibs_own_layout_and_the_same_bytes_each_time(tmp_path,
-                                                                                   monkeypatch):
+@pytest.fixture(scope="module")
+def fig_1_4(tmp_path_factory):
+    """[HLW] Fig 1.4 run at the quick scale once for the tests that only draw from its tables."""
+    from gnibench.suite.cli.main import main
+
+    out = tmp_path_factory.mktemp("fig-1.4")
+    assert main(["reproduce", "hlw-fig-1.4", "--scale", "quick", "-o", str(out), "-j", "1",
+                 "--no-report"]) == 0
+    return out / "hlw-fig-1.4"
+
+
+def test_images_are_those_of_matplotlibs_own_layout_and_the_same_bytes_each_time(
+        fig_1_4, tmp_path, monkeypatch):
     """draw_figure lays a figure out once (``_lay_out_once``) and draws the PNG and the SVG once
     each: the PNG is byte for byte the one savefig writes when it runs the constrained layout
     itself, and a second drawing writes the same bytes (the SVG's ids are salted by
     ``svg.hashsalt``; the SVG keeps the PNG's layout, where savefig would lay it out again at
     72 dpi and move the axes by a fraction of a point)."""
     import gnibench.reports.figures as figs
-    from gnibench.suite.cli.main import main
 
-    assert main(["reproduce", "hlw-fig-1.4", "--scale", "quick", "-o", str(tmp_path), "-j", "1",
-                 "--no-report"]) == 0
-    results = tmp_path / "hlw-fig-1.4"
+    results = fig_1_4
 
     def images(out):
         figs.draw_figure(results, out)
@@ -173,8 +181,8 @@ def test_images_are_those_of_matplotlibs_own_layout_and_the_same_bytes_each_time
     assert images(tmp_path / "c")["png"] == once["png"]
 
 
-def test_titles_over_log_axes_are_where_matplotlib_would_measure_them_to_be(tmp_path,
-                                                                           monkeypatch):
+def test_titles_over_log_axes_are_where_matplotlib_would_measure_them_to_be(
+        fig_1_4, tmp_path, monkeypatch):
     """A panel with a log y axis gets its title at y = 1 without matplotlib's measuring of the
     tick labels (reports/figures/plot.py): the PNG is byte for byte the one drawn with the
     title placed by matplotlib; on linear y axes matplotlib still places it."""
@@ -182,12 +190,9 @@ def test_titles_over_log_axes_are_where_matplotlib_would_measure_them_to_be(tmp_
 
     import gnibench.reports.figures as figs
     from gnibench.reports.figures.data import Results
-    from gnibench.suite.cli.main import main
     from matplotlib.axes import Axes
 
-    assert main(["reproduce", "hlw-fig-1.4", "--scale", "quick", "-o", str(tmp_path), "-j", "1",
-                 "--no-report"]) == 0
-    results = tmp_path / "hlw-fig-1.4"
+    results = fig_1_4
     figure = copy.deepcopy(Results.read(results).figure)
     for panel in figure["panels"]:
         panel.update(yscale="log", ylim=None)
