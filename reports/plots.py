@@ -280,6 +280,17 @@ def time_figures(problem: str, cells, samples, out_dir: Path, prefix: str, slug:
     return out
 
 
+def section_charts(problem: str) -> int:
+    """How many charts a problem's section points are labelled with (0: none or unknown)."""
+    from gnibench.problems import REGISTRY
+    from gnibench.suite.cell.spec import item_id
+
+    record = REGISTRY.get(item_id(problem, "problem"))
+    if record is None or not record.sections:
+        return 0
+    return int(record.sections[0].charts)
+
+
 def section_coords(problem: str) -> tuple[str, ...]:
     """The recorded coordinates of a problem's (first) Poincaré section (``problem``: a spec)."""
     from gnibench.problems import REGISTRY
@@ -308,7 +319,11 @@ def section_plot(problem: str, cells, points, style) -> Plot | None:
             panel.series.append(Series(x, y, {
                 "s": 1.5, "c": s["chart"].to_numpy(float), "cmap": "tab10", "vmin": 0.5,
                 "vmax": 10.5, "linewidths": 0}, scatter=True))
-            panel.colorbar = {"label": "chart", "ticks": list(range(1, 9))}
+            # the colour bar shows the problem's charts only, not tab10's unused colours above
+            n = section_charts(str(cells["problem"].iloc[0])) or int(np.nanmax(s["chart"]))
+            panel.colorbar = {"label": "chart", "ticks": list(range(1, n + 1)),
+                              "boundaries": [k + 0.5 for k in range(n + 1)],
+                              "values": list(range(1, n + 1))}
         else:
             panel.series.append(Series(x, y, {"s": 1.5, "color": style[row["family"]]["color"],
                                               "linewidths": 0}, scatter=True))

@@ -304,3 +304,34 @@ def test_markdown_escape(text, want):
     from gnibench.reports.markdown import escape
 
     assert escape(text) == want
+
+
+def test_the_chart_colour_bar_shows_the_problems_charts_only():
+    """so(4)'s section points carry charts Γ1..Γ8 ([B] §7.1): the colour bar has eight colours,
+    tick k on the colour of the points of chart k, and none of tab10's two unused colours, even
+    when the run crossed only some of the charts."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from gnibench.reports.plots import section_plot
+    from gnibench.reports.render import _panel
+
+    cells = pd.DataFrame({"cell": [0], "problem": ["euler-so4"], "method": ["rk4:h=0.01"],
+                          "label": ["rk4"], "family": ["rk4"]})
+    charts = np.array([1, 2, 2, 6], dtype=float)
+    points = pd.DataFrame({"cell": 0, "x5": [0.1, 0.2, 0.3, 0.4], "x6": [0.0, 0.1, 0.2, 0.3],
+                           "chart": charts})
+    panel = section_plot("euler-so4", cells, points, {"rk4": {"color": "k"}}).panels[0]
+    fig, ax = plt.subplots()
+    _panel(fig, ax, panel)
+    bar = fig.axes[-1]
+    assert [t for t in bar.get_yticks()] == list(range(1, 9))
+    colorbar = ax.collections[0].colorbar
+    assert len(colorbar.values) == 8
+    tab10 = matplotlib.colormaps["tab10"].colors
+    shown = colorbar.cmap(colorbar.norm(np.asarray(colorbar.values)))[:, :3]
+    assert np.allclose(shown, tab10[:8])
+    points = ax.collections[0]
+    points_rgb = points.to_rgba(points.get_array())[:, :3]
+    assert np.allclose(points_rgb, [tab10[int(k) - 1] for k in charts])
+    plt.close(fig)
