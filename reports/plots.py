@@ -280,26 +280,25 @@ def time_figures(problem: str, cells, samples, out_dir: Path, prefix: str, slug:
     return out
 
 
-def section_charts(problem: str) -> int:
-    """How many charts a problem's section points are labelled with (0: none or unknown)."""
+def _section(problem: str):
+    """The (first) Poincaré section of a problem (``problem``: a spec), or None."""
     from gnibench.problems import REGISTRY
     from gnibench.suite.cell.spec import item_id
 
     record = REGISTRY.get(item_id(problem, "problem"))
-    if record is None or not record.sections:
-        return 0
-    return int(record.sections[0].charts)
+    return record.sections[0] if record is not None and record.sections else None
+
+
+def section_charts(problem: str) -> int:
+    """How many charts a problem's section points are labelled with (0: none or unknown)."""
+    section = _section(problem)
+    return int(section.charts) if section is not None else 0
 
 
 def section_coords(problem: str) -> tuple[str, ...]:
     """The recorded coordinates of a problem's (first) Poincaré section (``problem``: a spec)."""
-    from gnibench.problems import REGISTRY
-    from gnibench.suite.cell.spec import item_id
-
-    record = REGISTRY.get(item_id(problem, "problem"))
-    if record is None or not record.sections:
-        return ()
-    return tuple(record.sections[0].coords)
+    section = _section(problem)
+    return tuple(section.coords) if section is not None else ()
 
 
 def section_plot(problem: str, cells, points, style) -> Plot | None:

@@ -65,7 +65,7 @@ def run(a) -> int:
         # imports what they need while the cells are prepared and run (-j 1: in this process)
         if a.jobs != 1:
             drawers.start(min(a.jobs or cores(), cores()), preload=FIGURE_MODULES)
-        return _reproduce(a, out, drawers)
+        return _reproduce(a, out, ids, drawers)
 
 
 #: what drawing a figure imports (the drawing process imports them once, before its forks)
@@ -73,11 +73,10 @@ FIGURE_MODULES = ("pandas", "pyarrow.parquet", "matplotlib.pyplot", "gnibench.re
                   "gnibench.reports.figures.plot", "gnibench.reports.figures.table")
 
 
-def _reproduce(a, out: Path, drawers) -> int:
+def _reproduce(a, out: Path, ids: list[str], drawers) -> int:
     from gnibench.suite.runs import reproduce as rep
 
     if a.redraw:
-        ids = rep.choose(a.ids)
         dirs = [out / fid for fid in ids]
         figures = [rep.current_figure(fid, d) for fid, d in zip(ids, dirs)]
     else:
