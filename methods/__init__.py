@@ -60,7 +60,7 @@ METHODS = {m.id: m for m in (
 ALIASES = {alias: m.id for m in METHODS.values() for alias in m.aliases}
 
 # The methods that run as compiled gnibench kernels; the external engines (methods/external.py)
-# have their own tests (tests/test_reference.py).
+# have their own tests (tests/cell/test_reference.py).
 COMPILED = {k: m for k, m in METHODS.items() if m.kind == "compiled"}
 
 MODIFIERS = {m.id: m for m in (

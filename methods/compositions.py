@@ -20,7 +20,7 @@ first-order method Φ (symplectic Euler, ``pstep_u``) and its adjoint Φ* (``pst
 Every stage reuses the partitioned kernels of methods/partitioned.py (explicit for separable
 problems, Newton otherwise). The step reads the coefficients from ``par`` at run time
 (``Method.runtime_data``, ``partitioned.compose``), so all compositions of a problem share one
-compiled kernel. The orders are checked by measurement (tests/test_orders.py) and the
+compiled kernel. The orders are checked by measurement (tests/methods/test_orders.py) and the
 consistency and symmetry conditions here. Under ``sum=compensated`` every stage's block
 updates add their increments with the carried rounding error (methods/summation.py). Adding a
 composition: its coefficients here and one line in :mod:`methods` (``summation="compensated"``

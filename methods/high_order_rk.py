@@ -12,7 +12,7 @@ Controller (choice, as for DOP853 in Hairer's code): the estimate of a p(p-1) pa
 err^(1/p) drives the step (Feagin 10(8): O(h^9), 1/9); no PI term (beta = 0), safety 0.9, step
 ratio within [1/6, 3].
 
-Measured (tests/test_order_conditions.py, no cache): every condition of b and b̂ holds exactly for
+Measured (tests/methods/test_order_conditions.py, no cache): every condition of b and b̂ holds exactly for
 Verner's pairs; the interpolants of Vern6 exactly (order 6), Vern8 and Vern9 within 1e-30 (their
 extra stages and weights are 40-digit decimals). Vern7's published order-7 interpolant (six extra
 stages, as in OrdinaryDiffEq.jl's Vern7 and Geant4's VernerRK67, both from Verner's file

@@ -25,7 +25,7 @@ a' = ω b, b' = -ω a (solution: a ← c a + s b, b ← -s a + c b, c = cos ωτ
     H^(1): (x2, x3), (x5, x6)    H^(2): (x3, x1), (x6, x4)    H^(3): (x1, x2), (x4, x5)
     H^(4): (x2, x6), (x5, x3)    H^(5): (x6, x1), (x3, x4)    H^(6): (x1, x5), (x4, x2)
 
-(``ROTATIONS`` below, 0-based; tests/test_lie_poisson.py checks symbolically that the six fields
+(``ROTATIONS`` below, 0-based; tests/methods/test_lie_poisson.py checks symbolically that the six fields
 add up to (7.1)). Each sub-flow rotates two orthogonal planes by the same angle, so it keeps H2 = |x|²
 and the inner product x2 x5 + x3 x6 (resp. the analogous pairing) of H1 exactly; only round-off
 moves them. J_14 = J_25 = J_36 = 0 means {x1², x4²} = {x2², x5²} = {x3², x6²} = 0: the flows of

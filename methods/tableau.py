@@ -33,7 +33,7 @@ def verdict_key(kind: str, order: int, tol, *data) -> str:
 def shipped_verdicts() -> set[str]:
     """Keys of the shipped tableaus' passing verdicts (methods/order_verdicts.json): the exact data
     of every tableau, estimate and extension of the registry, hashed with the checker's version.
-    tests/test_order_conditions.py recomputes each of them from scratch and checks that the file
+    tests/methods/test_order_conditions.py recomputes each of them from scratch and checks that the file
     lists exactly the registry's keys, so a changed coefficient is never covered by it. After a
     change to a shipped tableau (its checks pass on import), write the file again with
     ``python -c "import gnibench.methods.tableau as t, gnibench.methods, json;

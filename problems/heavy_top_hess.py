@@ -3,7 +3,7 @@
 [B] §2 names the Euler-Poisson equations of a heavy top as the source of partial first integrals
 ("invariant relations") but writes none out; the model and the Hess relation below are the standard
 ones (Hess 1890; e.g. Borisov-Mamaev, "Rigid body dynamics"), derived again here and checked
-symbolically in tests/test_partial_integrals.py.
+symbolically in tests/problems/test_partial_integrals.py.
 
 State x = (M1, M2, M3, g1, g2, g3): angular momentum M = I omega and Poisson vector gamma (the unit
 vertical) in the body frame, I = diag(A, B, C), centre of mass at r = (x0, y0, z0), mu = m g |r|:

@@ -185,7 +185,7 @@ AXES_LEFT, AXES_WIDTH = 1.17, 6.11
 #: the legend's text size (points, as in :func:`_panel`), and its line handle and pads (inches)
 LEGEND_PT, HANDLE_IN = 7.0, 0.75
 #: advance widths of DejaVu Sans (matplotlib's default font), hundredths of an em, for the
-#: characters 32-126 (tests/test_report_drawing.py checks them against the font); others: 1 em
+#: characters 32-126 (tests/reports/test_report_drawing.py checks them against the font); others: 1 em
 ADVANCE = (32, 40, 47, 84, 64, 96, 78, 28, 39, 39, 50, 85, 32, 36, 32, 34, 64, 64, 64, 64, 64,
            64, 64, 64, 64, 64, 34, 34, 84, 85, 84, 53, 100, 68, 69, 70, 77, 63, 58, 78, 75, 29,
            29, 65, 56, 86, 75, 79, 60, 79, 70, 64, 62, 73, 68, 99, 69, 61, 68, 39, 34, 39, 84,

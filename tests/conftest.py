@@ -17,35 +17,35 @@ import pytest
 from gnibench.suite.foundation import datastack
 
 # the test processes do gnibench's work as its commands and API do, with the frame-stack chunks
-# kept for reuse (suite/foundation/datastack.py; tests/test_datastack.py also runs without them)
+# kept for reuse (suite/foundation/datastack.py; tests/kernels/test_datastack.py also runs without them)
 datastack.install()
 
 #: the costliest modules, longest first: their summed test durations (s) in a cold run (empty
 #: kernel cache) on 2 cores, 2026-11-27; the modules not listed follow in collection order
 COSTLIEST_FIRST = [
     "test_time_grid.py",          # 70
-    "test_hlw_claims.py",         # 55
+    "test_hlw_chapter_1.py",         # 55
     "test_inline.py",             # 51
-    "test_b_figures_s78.py",      # 50
+    "test_b_sections_7_8.py",      # 50
     "test_orders.py",             # 38
     "test_dense_output.py",       # 32
     "test_sections.py",           # 27
     "test_runner_store.py",       # 27
     "test_signals.py",            # 27
-    "test_b_figures_s5.py",       # 26
+    "test_b_section_5.py",       # 26
     "test_summation.py",          # 25
     "test_cache_healing.py",      # 23
     "test_generating_function.py",  # 21
-    "test_problems_seed.py",      # 20
+    "test_seed_problems.py",      # 20
     "test_cache_integrity.py",    # 19
-    "test_user_heldout.py",       # 15
+    "test_user_definitions_unseen.py",       # 15
     "test_locator_precision.py",  # 14
-    "test_b_figures_s6.py",       # 13
+    "test_b_section_6.py",       # 13
     "test_user_runs.py",          # 12
     "test_reversibility.py",      # 11
     "test_hairer_counts.py",      # 10
     "test_user_definitions.py",   # 10
-    "test_attack_cli.py",         # 10
+    "test_cli_refusals.py",         # 10
 ]
 
 

@@ -163,7 +163,7 @@ def with_and_without(patch: str, produce: str, after_uninstall: str = "") -> tup
         import pickle, sys
         sys.path.insert(0, "tests")       # as pytest has it: the test files import support
         from gnibench.suite.foundation import {patch} as patch
-        import tests.{module} as t
+        import tests.kernels.{module} as t
         assert patch.install()
         first = t.{function}()
         patch.uninstall()

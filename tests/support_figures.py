@@ -6,7 +6,7 @@ session fixture (``gnibench reproduce`` of the section's figures into one result
 checks it with :func:`check_figure` and with what the section's figures must show besides. The
 file's claims are verified at the quick scale in the same store, as ``gnibench verify -o DIR`` after
 ``gnibench reproduce -o DIR`` does: the cells of the figures are reused, not computed again.
-tests/test_figures.py checks that every figure of the registry has exactly one such file.
+tests/seeds/test_seed_figures.py checks that every figure of the registry has exactly one such file.
 """
 from __future__ import annotations
 
@@ -16,11 +16,11 @@ from pathlib import Path
 
 #: test file -> the figures it reproduces at the quick scale
 SECTION_FIGURES = {
-    "test_b_figures_s4": [f"b-fig-{k}" for k in range(1, 9)],
-    "test_b_figures_s5": [f"b-fig-{k}" for k in range(9, 15)],
-    "test_b_figures_s6": [f"b-fig-{k}" for k in range(15, 26)],
-    "test_b_figures_s78": [f"b-fig-{k}" for k in range(26, 33)],
-    "test_hlw_claims": ["hlw-fig-1.1", "hlw-fig-1.2", "hlw-fig-1.3", "hlw-fig-1.4", "hlw-fig-2.2",
+    "test_b_sections_2_to_4": [f"b-fig-{k}" for k in range(1, 9)],
+    "test_b_section_5": [f"b-fig-{k}" for k in range(9, 15)],
+    "test_b_section_6": [f"b-fig-{k}" for k in range(15, 26)],
+    "test_b_sections_7_8": [f"b-fig-{k}" for k in range(26, 33)],
+    "test_hlw_chapter_1": ["hlw-fig-1.1", "hlw-fig-1.2", "hlw-fig-1.3", "hlw-fig-1.4", "hlw-fig-2.2",
                         "hlw-fig-2.3", "hlw-fig-2.4", "hlw-fig-3.1", "hlw-table-2.1"],
 }
 

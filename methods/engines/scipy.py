@@ -4,7 +4,7 @@ The solver object of ``scipy.integrate`` is stepped exactly as ``solve_ivp`` ste
 (``scipy/integrate/_ivp/ivp.py``: ``solver.step()`` until it finishes or fails; the points of
 ``t_eval`` passed by a step are read from that step's ``solver.dense_output()``), so the samples,
 steps and counts are those of ``solve_ivp(fun, (0, T), y0, method, t_eval=grid, rtol, atol,
-max_step, first_step[, jac])`` — ``tests/test_scipy_engine.py`` checks it bit for bit. Stepping it
+max_step, first_step[, jac])`` — ``tests/methods/test_scipy_engine.py`` checks it bit for bit. Stepping it
 ourselves gives what ``solve_ivp`` keeps to itself: the counters after each accepted step, so that
 every sample carries the cumulative ``steps`` (accepted steps: one per ``solver.step()``, which
 retries rejected attempts inside; for LSODA one internal step of the Fortran code, ``itask=5``),

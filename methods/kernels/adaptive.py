@@ -43,7 +43,7 @@ so that the plain driver compiles without the others' code (one driver carrying 
 the dense-output loops took 50 % longer to compile, measured on kepler-3d):
 
 * ``integrate_adaptive``: a sample every ``every`` accepted steps plus the final point; with a
-  5th column in ``out_c``, the size of the step ending at each sample (tests/test_dense_output.py);
+  5th column in ``out_c``, the size of the step ending at each sample (tests/kernels/test_dense_output.py);
 * ``integrate_dense`` (``DENSE_OUTPUT``, ``GRIDDED``, ``WITH_STAGES``; pairs with a continuous
   extension, methods/dense_output.py): the grid t_k = k dt_out (k = 0, every, ... < ``n_out``) plus
   t_end by dense output, as Hairer's SOLOUT does (HNW I §II.6), the steps unchanged;

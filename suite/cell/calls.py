@@ -7,7 +7,7 @@ called again; :func:`run_driver` does so, with a budget tuned so that one call l
 ``CALL_SECONDS`` (progress reports and Ctrl-C are handled between calls, so an interrupt stops any
 integration within a fraction of a second) and a new buffer whenever one is full. Only the time
 spent inside the compiled calls counts as wall time. The results do not depend on the buffer size
-or the budget (tests/test_sections.py, tests/test_time_grid.py).
+or the budget (tests/cell/test_sections.py, tests/cell/test_time_grid.py).
 """
 from __future__ import annotations
 

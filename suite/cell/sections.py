@@ -30,7 +30,7 @@ Design
      changes θ; the iterate of smallest |g| is reported, at t_n + θ h. The located point is the
      method's own dense output: it lies on the numerical orbit within the extension's error, of
      the order of the tolerance (on henon-heiles at rtol = 1e-12 the dense and Hénon crossings
-     differ by 3e-12; tests/test_sections.py).
+     differ by 3e-12; tests/cell/test_sections.py).
    * ``henon`` (Hénon 1982, Physica D 5) -- every other method, the fixed-step mode of the
      embedded pairs, and cells with a step modifier or a problem ``post_step`` (their accepted
      point is not the end of the continuous extension). From the accepted point y_n before the

@@ -4,7 +4,7 @@ The tables of ``suite/experiments/README.md`` (experiment, groups, point sets, s
 of ``README.md`` (claims) sit between ``<!-- schema: NAME -->`` and ``<!-- /schema -->`` markers
 and are generated from the records (:mod:`gnibench.suite.runs.experiment_schema`,
 :mod:`gnibench.suite.runs.figure_schema`, :class:`gnibench.suite.ledger.entries.Claim`);
-``tests/test_schema_docs.py`` fails when they differ. Regenerate them after changing a record::
+``tests/runs/test_schema_docs.py`` fails when they differ. Regenerate them after changing a record::
 
     python -m gnibench.suite.cli.schema_docs            # rewrite the tables in place
     python -m gnibench.suite.cli.schema_docs --check    # exit 1 when a table is stale

@@ -6,7 +6,7 @@ in the current chunk maps a new one (``_PyObject_VirtualAlloc``, by default an `
 return that empties it unmaps it at once. A loop that calls a function just across that edge
 maps, faults in and unmaps a chunk on every call. numba's compiler does exactly this when the
 edge falls inside one of its recursive walks over a function's IR: compiling the kernels of
-``tests/test_time_grid.py`` from an empty cache took 3.5 million page faults and 20 s of system
+``tests/cell/test_time_grid.py`` from an empty cache took 3.5 million page faults and 20 s of system
 time out of 90 s (``perf stat``, CPython 3.11.7, 2026-11-27). CPython fixed it in 2026 by keeping
 one freed chunk per thread (python/cpython#145789, 3.13 and 3.14 backports); 3.11 and 3.12 only
 get security fixes.
@@ -24,7 +24,7 @@ compiler needed):
 Every block therefore comes from the previous allocator and goes back to it, whatever was
 allocated before :func:`install`; a reused chunk is not zeroed, as in CPython's own fix (a frame
 initialises what it uses). Arena calls are made with the GIL held, so the two globals need no
-lock. Measured on ``tests/test_time_grid.py`` from an empty kernel cache: 90.2 s -> 70.3 s of
+lock. Measured on ``tests/cell/test_time_grid.py`` from an empty kernel cache: 90.2 s -> 70.3 s of
 CPU, 3.47 million -> 0.68 million page faults, system time 19.9 s -> 1.8 s.
 
 Installed by the command line, the Python API, the kernels' loader and the test processes (forked

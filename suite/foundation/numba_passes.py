@@ -15,7 +15,7 @@ over every statement, ~10 times per function).
   first, an instruction's own ``list_vars`` answering for it.
 
 :func:`install` is called where a kernel is imported (``suite/cell/codegen.py``, with the typing
-memo). ``tests/test_numba_passes.py`` compiles kernels with and without it and compares the
+memo). ``tests/kernels/test_numba_passes.py`` compiles kernels with and without it and compares the
 types, the calls, the LLVM code and the results. Measured on 10 cold kernels of 5 problems and
 9 methods (three alternating runs each): 17.2, 14.4, 14.7 s of compilation without, 14.0, 12.9,
 13.4 s with.

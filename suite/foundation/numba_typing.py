@@ -22,7 +22,7 @@ lives, it is the one numba asks), keyed by the typing context (held, not its id)
 types. A failed resolution raises as before and is not remembered.
 
 Measured on this 2-core machine (10 cold cells of 8 problems and 9 methods, three runs each):
-11.5 s -> 9.7 s of compilation. ``tests/test_numba_typing.py`` compiles a kernel with and without
+11.5 s -> 9.7 s of compilation. ``tests/kernels/test_numba_typing.py`` compiles a kernel with and without
 the memo and compares the type of every variable, the signature of every call and the results.
 numba versions whose ``BaseFunction`` has no ``get_call_type`` are left alone.
 """

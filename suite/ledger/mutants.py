@@ -156,7 +156,7 @@ def _env(import_root: Path, cache: Path) -> dict:
     env["PYTHONPATH"] = str(import_root)
     env["GNIBENCH_CACHE_DIR"] = str(cache)
     env.pop("PYTEST_ADDOPTS", None)
-    # tests/test_hairer_counts.py compares with Hairer's Fortran in a venv it makes once in the
+    # tests/methods/test_hairer_counts.py compares with Hairer's Fortran in a venv it makes once in the
     # user's cache (not keyed by content, so not seeded): point the copy at it, else every mutant
     # would build its own
     if "GNIBENCH_FORTRAN_SCIPY_PYTHON" not in env:

@@ -3,7 +3,7 @@
 [HLW] Table 2.1 gives how the errors of the Kepler problem scale with h (O(h), O(h^2), O(th),
 O(t h^2)); the global error of a method of order p is O(t h^p) ([HLW] (1.5)-(1.7), (1.9),
 (1.17)). The observed order is the least-squares slope of log(error) against log(h)
-(GeometricIntegrators.jl style, as in tests/test_orders.py):
+(GeometricIntegrators.jl style, as in tests/methods/test_orders.py):
 
 * points below a round-off plateau (1e-13), points after the error stops decreasing, and failed
   runs (infinite or NaN errors) are dropped: the longest run of decreasing errors is kept;

@@ -10,7 +10,7 @@ Adaptive part (``bench_adaptive``): dopri5 and dop853 on kepler-2d, rtol = atol 
 periods, Hairer's HINIT start, µs per attempted step (accepted + rejected). References: (a)
 ``bench_c/kepler_adaptive.c``, a C port of the same driver, its unrolled step written from the
 same ``Pair`` record (``pair_header``): same operations, so the same step counts and final state
-(checked in the table and by tests/test_bench_adaptive.py);
+(checked in the table and by tests/runs/test_bench_adaptive.py);
 (b) ``scipy.integrate.solve_ivp`` (RK45 / DOP853, same tolerances, a plain Python right-hand
 side) over ``SCIPY_PERIODS`` periods, per step = wall / (nfev / evaluations per step).
 Targets: numba <= 1.3x C, and >= 100x faster than solve_ivp per step.

@@ -1,6 +1,6 @@
 """Step counts of Hairer's DOPRI5 / DOP853 through scipy's ``integrate.ode``, for one run.
 
-Run by tests/test_hairer_counts.py in an interpreter whose scipy wraps Hairer's Fortran codes
+Run by tests/methods/test_hairer_counts.py in an interpreter whose scipy wraps Hairer's Fortran codes
 (scipy < 1.17; see that test). Plain Python and numpy only, so nothing of gnibench is involved:
 the Kepler field is written out by hand.
 

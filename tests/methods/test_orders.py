@@ -33,7 +33,7 @@ TOL = 0.35
 # Verner's and Feagin's pairs (orders 6-10) reach the round-off plateau within 3-4 halvings on the
 # cases above, with a pre-asymptotic head; Kepler over T = 30 (about 4.8 periods)
 # from h = 0.5 keeps 4-5 points in the asymptotic range. Their exact order is proved by the order
-# conditions (tests/test_order_conditions.py); measured, their slope is not below the declared
+# conditions (tests/methods/test_order_conditions.py); measured, their slope is not below the declared
 # order by more than TOL, and exceeds it by at most HIGH_TOL (measured 6.50, 7.08, 8.43, 9.97,
 # 10.63 for orders 6, 7, 8, 9, 10: pre-asymptotic super-convergence of the phase error).
 HIGH_CASE = ("kepler-2d", 30.0, 60, 8)

@@ -21,7 +21,7 @@ from gnibench.suite.foundation.errors import UserError
 from gnibench.suite.metrics.cells import make_cell
 from gnibench.suite.runs.experiment import parse_experiment
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 EXPERIMENT = """
 name = "typed"

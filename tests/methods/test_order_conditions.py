@@ -111,7 +111,7 @@ def _float_defect(a, b, k) -> float:
 def test_the_record_of_shipped_verdicts_is_exactly_the_registry():
     """methods/order_verdicts.json lists the verdict keys of exactly the registry's tableaus,
     estimates and extensions (a fresh process: the keys asked for while importing the registry),
-    each of which the tests above and tests/test_dense_output.py recompute without it."""
+    each of which the tests above and tests/kernels/test_dense_output.py recompute without it."""
     import json
     import subprocess
     import sys

@@ -13,7 +13,7 @@ from gnibench.suite.runs.experiment import load_experiment, parse_experiment, sh
 from gnibench.suite.runs.storage import read_parquet_meta
 
 OUTPUTS = ("samples.parquet", "cells.parquet", "timings.parquet", "summary.md")
-STORE = (".lock", "parts")       # the resumable store (tests/test_runner_store.py)
+STORE = (".lock", "parts")       # the resumable store (tests/runs/test_runner_store.py)
 
 # One kernel (kepler-2d x euler) serves every cell: h is a run-time number.
 TINY = """

@@ -18,7 +18,7 @@ from support_figures import SECTION_FIGURES, check_figure, reused_cells
 AXES = {"b-fig-26": ("x₅", "x₆"), "b-fig-27": ("t", "|H3 − H3(x₀)|"),
            "b-fig-28": ("t", "|H1 − H1(x₀)|"), "b-fig-29": ("t", "|H2 − H2(x₀)|"),
            "b-fig-30": ("t", "|Hi − Hi(x₀)|"), "b-fig-31": ("q₁", "q₂"), "b-fig-32": ("t", "|H − H0|")}
-FIGURES = SECTION_FIGURES["test_b_figures_s78"]
+FIGURES = SECTION_FIGURES["test_b_sections_7_8"]
 CLAIMS = ["B-7.2-a", "B-7.2-b", "B-7.2-c", "B-7.2-d", "B-7.2-e", "B-7.2-f", "B-7.2-g", "B-7.2-h",
           "B-8.2-a", "B-X-a", "B-X-b"]
 #: parts of B-X-* in sections other helpers write (CLAIMS.md ids); empty once merged

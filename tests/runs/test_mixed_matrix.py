@@ -11,7 +11,7 @@ import gnibench
 import pytest
 from gnibench.suite.cli.main import main
 
-DEFINITIONS = Path(__file__).resolve().parents[1] / "examples" / "definitions.toml"
+DEFINITIONS = Path(__file__).resolve().parents[2] / "examples" / "definitions.toml"
 MIXED = """
 name = "mixed"
 title = "compiled, user and scipy methods in one matrix"

@@ -3,7 +3,7 @@ each point against the crossing of the exact flow from the accepted point before
 independently by heyoka in long double.
 
 The harmonic oscillator q' = p, p' = -q (a temporary section {q = 0, p > 0}, as in
-tests/test_sections.py) rotates (q, p) rigidly, so from any (q_n, p_n) the exact flow crosses
+tests/cell/test_sections.py) rotates (q, p) rigidly, so from any (q_n, p_n) the exact flow crosses
 the section at (0, ±r_n), r_n = |(q_n, p_n)|, after τ = atan2(−q_n, p_n) mod π (the reference
 event has no direction): the reference locator is checked against that closed form, and the
 closed form against located points moved by a known amount. A locator that accepts its m- and 2m-substep results agreeing to 1e-9 (not
@@ -91,7 +91,7 @@ import json, sys
 import gnibench.methods.events as events
 if sys.argv[1] != "shipped":                  # else the package's own value
     events.HENON_RTOL = float(sys.argv[1])    # before any kernel is generated
-from tests.test_locator_precision import tables, GS, ODEX
+from tests.cell.test_locator_precision import tables, GS, ODEX
 from gnibench.suite.ledger.closed_forms_locator import section_locator_precision
 print(json.dumps(section_locator_precision(*tables(GS, ODEX, 20, 25.0))))
 """

@@ -1,6 +1,6 @@
 """The runner's local pool: the plan (kernel groups, affinity, longest first), workers that never
 import pandas, quiet workers, a dead worker, a run stopped early, fitting the pool to the cells, no
-process left behind; the tables of a pool run are those of a serial run (tests/test_runner_store.py
+process left behind; the tables of a pool run are those of a serial run (tests/runs/test_runner_store.py
 checks -j 1, -j 2 and Dask on the command line).
 
 No test depends on timing: each waits for an outcome or a process's end, never for a time."""

@@ -6,7 +6,7 @@ at angle θ_n = n α from the p-axis, the numerical orbit crosses {q = 0, p > 0}
 n_k = ceil(2πk/α) - 1 (θ_n < 2πk <= θ_n+1). Hénon's trick locates the crossing on the exact flow
 through y_n, a rotation, so the k-th section point is p_k = |y_n_k| = (1 + h^2)^(n_k/2) exactly
 (the section test problem is the harmonic oscillator with a temporary section, as in
-tests/test_sections.py).
+tests/cell/test_sections.py).
 """
 from __future__ import annotations
 

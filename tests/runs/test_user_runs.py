@@ -14,7 +14,7 @@ import pytest
 from gnibench.suite.cell.user import loader
 from gnibench.suite.cli.main import main
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 EXAMPLES = ROOT / "examples"
 
 EXPERIMENT = """

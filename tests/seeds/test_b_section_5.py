@@ -9,7 +9,7 @@ from gnibench.suite.cli.main import main
 from gnibench.suite.ledger.entries import load_ledger
 from support_figures import SECTION_FIGURES, check_figure, reused_cells
 
-FIGURES = SECTION_FIGURES["test_b_figures_s5"]
+FIGURES = SECTION_FIGURES["test_b_section_5"]
 CLAIMS = ["B-5.1-d"] + [f"B-5.2-{x}" for x in "abcdefghij"]
 PAPER_ONLY = {"B-5.2-b", "B-5.2-e", "B-5.2-h"}      # judged over 10⁵ revolutions only
 #: distinct cells of the six figures: plain DOPRI, the observer on (H, c²) (Figs 9-14), the penalty,

@@ -14,7 +14,7 @@ from gnibench.suite.ledger.closed_forms_b41 import apsides
 from gnibench.suite.ledger.entries import load_ledger
 from support_figures import SECTION_FIGURES, check_figure, reused_cells
 
-FIGURES = SECTION_FIGURES["test_b_figures_s4"]
+FIGURES = SECTION_FIGURES["test_b_sections_2_to_4"]
 CLAIMS = [f"B-4.1-{c}" for c in "abcdefghijk"] + ["B-3-d"]   # B-2-f: an aggregate over §5, §6
 
 

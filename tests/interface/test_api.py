@@ -15,7 +15,7 @@ import pandas as pd
 import pytest
 from gnibench.suite.cli.main import main
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 PERIOD = 6.283185307179586
 #: meta entries that are times of this run (not reproducible)
 TIMES = ("wall_seconds", "compile_seconds", "numba_cache_misses", "seconds", "cached")

@@ -16,7 +16,7 @@ from gnibench.suite.cell.drivers import AdaptiveDriver, FixedStepDriver
 from gnibench.suite.cell.spec import prepare
 from gnibench.suite.foundation.errors import UserError
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _sources(*folders):

@@ -31,7 +31,7 @@ from gnibench.suite.cell.solve import solve
 from gnibench.suite.foundation.cache import cache_dir
 
 FORTRAN_SCIPY = "scipy==1.16.3"
-SCRIPT = Path(__file__).parent / "scripts" / "hairer_counts.py"
+SCRIPT = Path(__file__).parents[1] / "scripts" / "hairer_counts.py"
 E = 0.6
 Y0 = [0.0, math.sqrt((1 + E) / (1 - E)), 1 - E, 0.0]      # kepler-2d's default point
 T_END = 100 * 2 * math.pi

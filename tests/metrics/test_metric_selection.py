@@ -17,7 +17,7 @@ from gnibench.suite.cli.main import main
 from gnibench.suite.metrics import METRICS
 from gnibench.suite.metrics.compute import apply, parse_metrics
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _pattern(name: str) -> re.Pattern:

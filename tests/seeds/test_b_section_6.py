@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 from support_figures import SECTION_FIGURES, check_figure, reused_cells
 
-FIGURES = SECTION_FIGURES["test_b_figures_s6"]
+FIGURES = SECTION_FIGURES["test_b_section_6"]
 #: claims and their outcomes at the quick scale (paper-only claims: skipped; the observer runs
 #: that stop near the equilibrium: not measured)
 QUICK = {"B-6.1-f": "partly", "B-6.2-a": "reproduced", "B-6.2-b": "skipped",

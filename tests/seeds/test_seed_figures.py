@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 import os
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -40,6 +41,8 @@ def test_figure_is_reproduced_at_the_quick_scale_by_one_section_file(fid):
 def test_section_files_list_only_shipped_figures():
     listed = [fid for ids in SECTION_FIGURES.values() for fid in ids]
     assert sorted(listed) == sorted(IDS)
+    here = Path(__file__).parent
+    assert all((here / f"{name}.py").is_file() for name in SECTION_FIGURES), SECTION_FIGURES.keys()
 
 
 @pytest.mark.slow

@@ -1,7 +1,7 @@
 """User definitions (suite/cell/user): TOML problems and methods, Python integrators, their
 refusals (naming file, entry and key), the safe expression subset, and records reaching a process
 that never loaded them. End-to-end runs, measured orders and the example package:
-tests/test_user_runs.py."""
+tests/runs/test_user_runs.py."""
 from __future__ import annotations
 
 import json
@@ -19,7 +19,7 @@ from gnibench.suite.cell.user.expressions import ExpressionError, parse
 from gnibench.suite.cli.main import main
 from gnibench.suite.foundation.errors import UserError
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 DEFS = EXAMPLES / "definitions.toml"
 
 

@@ -1,5 +1,5 @@
 """Conditions on the composition coefficients (methods/compositions.py); their orders are measured in
-tests/test_orders.py.
+tests/methods/test_orders.py.
 
 For a symmetric composition Ψ_h = Φ_{γ_s h} ∘ … ∘ Φ_{γ_1 h} of a symmetric method Φ of order 2
 (Störmer–Verlet), order p requires Σ γ_i = 1 and Σ γ_i^(2k+1) = 0 for 2k + 1 < p (the conditions

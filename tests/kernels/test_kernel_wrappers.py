@@ -12,7 +12,7 @@ from gnibench.suite.cell.codegen import PYTHON_ENTRIES, PYTHON_PREFIXES
 from gnibench.suite.cell.drivers import AdaptiveDriver, FixedStepDriver, ready_cell
 from gnibench.suite.cell.spec import prepare
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def test_every_driver_is_a_python_entry():

@@ -236,7 +236,7 @@ def test_measured_orders_of_held_out_methods(tmp_path, defs):
     exp = tmp_path / "exp.toml"
     exp.write_text(f'''name = "heldout-orders"
 title = "held-out orders"
-reference = "tests/test_user_heldout.py"
+reference = "tests/runs/test_user_definitions_unseen.py"
 load = ["{Path(defs / 'defs.toml').as_posix()}"]
 t_end = 2.0
 every = 10
