@@ -127,9 +127,25 @@ def _header(n: int, newton_maxit: int = 50, compensated: bool = False) -> str:
             + kernel_constants() + slot_constants() + event_constants())
 
 
+_sources: dict[tuple, tuple] = {}
+
+
 def module_source(problem, method_cfg, keyed: bool = False) -> tuple[str, dict]:
     """The full text of a cell's module, and the problem metadata. ``keyed``: the text is only
-    hashed into the kernel key (:attr:`Context.keyed`)."""
+    hashed into the kernel key (:attr:`Context.keyed`).
+
+    The text depends on the problem's record and the method (its canonical text and records), not
+    on the problem's option values: it is made once per process for each such pair (a matrix
+    over initial values or parameters asks for it once per cell)."""
+    records = (problem.record, method_cfg.base.record, *(m.record for m in method_cfg.modifiers))
+    key = (tuple(id(r) for r in records), method_cfg.text(), keyed)
+    memo = _sources.get(key)
+    if memo is None or any(a is not b for a, b in zip(memo[0], records)):
+        memo = _sources[key] = (records, *_module_source(problem, method_cfg, keyed))
+    return memo[1], memo[2]
+
+
+def _module_source(problem, method_cfg, keyed: bool) -> tuple[str, dict]:
     from gnibench.methods.events import grid_functions, section_functions, variant
     from gnibench.methods.kernels import driver, linalg, newton
     from gnibench.methods.summation import carry_source, compensated
@@ -189,10 +205,21 @@ def _inline(text: str, prefix: str) -> str:
     return inline_source(text, names)
 
 
+_problem_sources: dict[int, tuple] = {}
+
+
 def problem_source(problem) -> tuple[str, dict]:
     """The text of a problem's own module: its generated functions (field, Jacobian, integrals
     and gradients, sections) and ``eval_invariants``, shared by every cell of the problem to
-    evaluate the first integrals at the samples (compiled cells, external engines, transforms)."""
+    evaluate the first integrals at the samples (compiled cells, external engines, transforms).
+    Made once per process for each problem record (it does not depend on the option values)."""
+    memo = _problem_sources.get(id(problem.record))
+    if memo is None or memo[0] is not problem.record:
+        memo = _problem_sources[id(problem.record)] = (problem.record, *_problem_source(problem))
+    return memo[1], memo[2]
+
+
+def _problem_source(problem) -> tuple[str, dict]:
     from gnibench.methods.events import henon_source, locate_all_source
     from gnibench.methods.kernels import driver
     from gnibench.problems.codegen import problem_code
@@ -208,6 +235,7 @@ def problem_source(problem) -> tuple[str, dict]:
 
 
 _loaded: dict[str, Any] = {}
+_by_text: dict[int, tuple[str, Any]] = {}      # id of a text -> (the text, its module)
 
 
 def _import(text: str, prefix: str):
@@ -218,8 +246,12 @@ def _import(text: str, prefix: str):
     that text with the small functions written into their callers (:func:`_inline`; done once,
     when the file is written: it costs more than generating the text), under a first line with
     the checksum of the rest."""
+    seen = _by_text.get(id(text))
+    if seen is not None and seen[0] is text:      # the same text object (made once, memoized)
+        return seen[1]
     key = _module_key(text, prefix)
     if key in _loaded:
+        _by_text[id(text)] = (text, _loaded[key])
         return _loaded[key]
     install_typing_memo()         # numba asks the same typing question once (numba_typing.py)
     numba_passes.install()        # no closure pass where there is no closure (numba_passes.py)
@@ -309,10 +341,17 @@ def problem_module_name(problem) -> str:
     return f"gnibench_problem_{_module_key(problem_source(problem)[0], 'problem')}"
 
 
+_problem_modules: dict[int, tuple] = {}
+
+
 def load_problem(problem):
     """Import (generating if needed) the problem's own compiled module: (module, meta)."""
-    text, meta = problem_source(problem)
-    return _import(text, "problem"), meta
+    memo = _problem_modules.get(id(problem.record))
+    if memo is None or memo[0] is not problem.record:
+        text, meta = problem_source(problem)
+        memo = _problem_modules[id(problem.record)] = (problem.record, _import(text, "problem"),
+                                                       meta)
+    return memo[1], memo[2]
 
 
 @functools.cache

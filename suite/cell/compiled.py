@@ -105,7 +105,13 @@ def _compile(problem: Bound, method) -> CompiledCell:
     extra.extend(float(base.values[name]) for name in base.record.runtime)
     extra.extend(float(x) for x in base.record.runtime_data)   # and its Method.runtime_data
     par = np.concatenate([pk.par, np.array(extra, dtype=np.float64)])
-    return CompiledCell(kernel, pk.kernel, pk.integral_names, pk.par, par, y0, h0_all, 0.0)
+    # the drivers run once are those of the module, whatever the cell (a matrix over initial
+    # values runs one module: warmed up once, its numba files recorded once)
+    warm = _warm.setdefault(kernel.__name__, set())
+    return CompiledCell(kernel, pk.kernel, pk.integral_names, pk.par, par, y0, h0_all, 0.0, warm)
+
+
+_warm: dict[str, set] = {}
 
 
 def dense_output_refusal(problem: Bound, method) -> str:
@@ -145,5 +151,12 @@ def kernel_plan(problem: Bound, method) -> tuple[str, int]:
         return f"engine:{method.base.record.engine}:{problem.id}", 0
     target = problem.record.transformed(problem.values) or problem
     text, _ = module_source(target, method, keyed=True)
+    seen = _plans.get(id(text))
+    if seen is not None and seen[0] is text and seen[2] == 0:     # found compiled: stays so
+        return seen[1], 0
     key = hashlib.sha256(text.encode()).hexdigest()[:20]
-    return key, 0 if compiled_before(text) else len(text)
+    _plans[id(text)] = (text, key, 0 if compiled_before(text) else len(text))
+    return key, _plans[id(text)][2]
+
+
+_plans: dict[int, tuple[str, str, int]] = {}     # id of a module's text -> (text, key, cost)

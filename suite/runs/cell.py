@@ -28,6 +28,7 @@ class Cell:
     group: int
     label: str
     spec: CellSpec
+    ensemble: object = None         # an EnsembleSpec (suite/runs/ensembles.py): its orbits
 
     @property
     def problem(self) -> str:

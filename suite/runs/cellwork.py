@@ -33,10 +33,11 @@ class CellOutcome:
     cell: object
     status: str
     reason: str
-    samples: object = None          # pandas DataFrame, None for a cell in error
+    samples: dict | None = None     # column name -> array; None for a cell in error
     row: dict = field(default_factory=dict)
     timing: dict = field(default_factory=dict)
     state_names: tuple[str, ...] = ()
+    orbits: dict | None = None      # an ensemble cell's per-orbit rows (column name -> array)
 
 
 def _throttled(cell_id: int, report) -> Callable[[float], None]:
@@ -51,50 +52,40 @@ def _throttled(cell_id: int, report) -> Callable[[float], None]:
     return progress
 
 
-def run_cell(cell, report: Callable[[int, float], None] | None = None,
-             frames: bool = True) -> CellOutcome:
+def run_cell(cell, report: Callable[[int, float], None] | None = None) -> CellOutcome:
     """Solve one cell (its typed cell, ``cell.spec``, as it is), apply its metrics, and build its
-    rows. ``frames=False``: the samples are left as columns (a dict of arrays; a pool worker
-    builds no DataFrame and never imports pandas), made a table by :func:`with_frame`."""
-    from gnibench.suite.cell.solve import solve_cell
-    from gnibench.suite.metrics.compute import apply
-    from gnibench.suite.runs.tables import cell_row, cell_sample_columns, cell_samples, timing_row
+    rows. The samples are columns (a dict of arrays: no DataFrame is made per cell, and a pool
+    worker never imports pandas); the tables are made from them (:func:`~gnibench.suite.runs.
+    tables.samples_table`). An ensemble cell runs its orbits (:mod:`.ensembles`)."""
+    from gnibench.suite.runs.tables import cell_row, timing_row
 
     report = report or _reporter
     progress = _throttled(cell.id, report) if report is not None else None
     try:
         with np.errstate(all="ignore"):     # overflow in a diverging cell is a status, not noise
-            traj = solve_cell(cell.spec, progress=progress)
-            metrics, skipped = apply(traj, cell.spec.metrics, problem=cell.spec.problem,
-                                     families=False)
-            samples = cell_samples(cell, traj, metrics) if frames else \
-                cell_sample_columns(traj, metrics)
-            row = cell_row(cell, traj, metrics, skipped=skipped)
+            if getattr(cell, "ensemble", None) is not None:
+                from gnibench.suite.runs.ensembles import run_ensemble
+
+                return run_ensemble(cell, progress)
+            return _single(cell, progress)
     except Exception as e:  # noqa: BLE001 - any failure of one cell is recorded, the run goes on
         reason = f"{type(e).__name__}: {e}".replace("\n", " ")
         return CellOutcome(cell, str(Status.ERROR), reason, None,
                            cell_row(cell, None, None, str(Status.ERROR), reason),
                            timing_row(cell, None, str(Status.ERROR)))
+
+
+def _single(cell, progress) -> CellOutcome:
+    from gnibench.suite.cell.solve import solve_cell
+    from gnibench.suite.metrics.compute import apply
+    from gnibench.suite.runs.tables import cell_row, cell_sample_columns, timing_row
+
+    traj = solve_cell(cell.spec, progress=progress)
+    metrics, skipped = apply(traj, cell.spec.metrics, problem=cell.spec.problem, families=False)
+    samples = cell_sample_columns(traj, metrics)
+    row = cell_row(cell, traj, metrics, skipped=skipped)
     return CellOutcome(cell, str(traj.status), traj.reason, samples, row, timing_row(cell, traj),
                        traj.state_names)
-
-
-def with_frame(outcome: CellOutcome) -> CellOutcome:
-    """An outcome of ``run_cell(..., frames=False)`` with its samples as the table (as
-    ``run_cell`` makes it; a failure there is the cell's error)."""
-    if not isinstance(outcome.samples, dict):
-        return outcome
-    from gnibench.suite.runs.tables import cell_frame, cell_row, timing_row
-
-    try:
-        outcome.samples = cell_frame(outcome.cell, outcome.samples)
-    except Exception as e:  # noqa: BLE001 - as run_cell records it
-        reason = f"{type(e).__name__}: {e}".replace("\n", " ")
-        cell = outcome.cell
-        return CellOutcome(cell, str(Status.ERROR), reason, None,
-                           cell_row(cell, None, None, str(Status.ERROR), reason),
-                           timing_row(cell, None, str(Status.ERROR)))
-    return outcome
 
 
 def kernel_plan(cell) -> tuple[str, int]:

@@ -144,15 +144,20 @@ def _dask(groups, jobs, scheduler) -> Iterator[CellOutcome]:
             raise UserError(f"bad --scheduler {scheduler!r}: cannot connect "
                             f"({type(e).__name__}: {e})") from None
     try:
-        waiting = {}                   # pure=False: fresh keys, never a result of another run
+        waiting, cells = {}, {}        # pure=False: fresh keys, never a result of another run
         for g in groups:
             if g:
-                waiting[client.submit(run_cell, g[0], pure=False)] = g[1:]
+                fut = client.submit(run_cell, g[0], pure=False)
+                waiting[fut], cells[fut.key] = g[1:], g[0]
         pending = as_completed(list(waiting))
         for fut in pending:
             for cell in waiting.pop(fut, []):
-                pending.add(client.submit(run_cell, cell, pure=False))
-            yield fut.result()
+                new = client.submit(run_cell, cell, pure=False)
+                cells[new.key] = cell
+                pending.add(new)
+            outcome = fut.result()
+            outcome.cell = cells.pop(fut.key)    # the caller's own cell, not the worker's copy
+            yield outcome
     except BaseException:
         import logging
 

@@ -74,7 +74,8 @@ def preload() -> None:
     """What the first cell of a fresh process would otherwise pay: the modules of a cell and the
     registries its records are looked up in, numba, and numba's CPU target (its typing and
     lowering registries, which import numpy's linear algebra support and scipy.linalg). Workers
-    send their samples as arrays (``run_cell(frames=False)``): they never import pandas."""
+    send their samples as arrays (:func:`~gnibench.suite.runs.cellwork.run_cell`): they never
+    import pandas."""
     import gnibench.methods
     import gnibench.problems
     import gnibench.suite.cell.solve
@@ -110,7 +111,7 @@ def _serve(conn, others: list, parent: int, ready: bool = False) -> None:
             return
         if cell is None:
             return
-        conn.send(("o", run_cell(cell, frames=False)))
+        conn.send(("o", run_cell(cell)))
 
 
 def _first(mine, rest: list, others: list, parent: int) -> None:
@@ -270,8 +271,6 @@ class Pool:
     def _outcomes(self, progress):
         from multiprocessing.connection import wait
 
-        from gnibench.suite.runs.cellwork import with_frame
-
         try:
             while busy := [w for w, cells in self.sent.items() if cells]:
                 for conn in wait([self.conns[w] for w in busy], timeout=POLL_SECONDS):
@@ -287,9 +286,12 @@ class Pool:
                         if progress is not None:
                             progress(message[1], message[2])
                         continue
-                    self.plan.done(self.sent[w].popleft())
+                    cell = self.sent[w].popleft()
+                    self.plan.done(cell)
                     self._top_up(w)
-                    yield with_frame(message[1])
+                    outcome = message[1]
+                    outcome.cell = cell       # the caller's own cell, not the worker's copy
+                    yield outcome
         except BaseException:
             self.stop(now=True)
             raise

@@ -150,11 +150,8 @@ def run_experiments(experiments: list[Experiment], outs: list[Path], store_root:
                             for e, out, k in zip(experiments, outs, keys)]
                 for outcome in outcomes:
                     key = key_of.get(id(outcome.cell)) or cell_key(outcome.cell)
-                    store.write(key, _part(outcome), writers[0].empty_samples)
+                    store.write(key, _part(outcome))
                     done.add(key)         # stored: counted even if a signal comes right now
-                    # read back (verified) while the workers go on: the tables at the end are
-                    # made from the disk's parts without waiting for the disk
-                    store.read(key)
                     progress.cell_done(outcome)
                     for w in writers:      # only the experiments that hold the cell have news
                         if key in w.key_set:
@@ -202,7 +199,7 @@ def _groups(cells) -> list[list]:
 
 
 def _part(o: CellOutcome) -> Part:
-    return Part(o.samples, o.row, o.timing, tuple(o.state_names))
+    return Part(o.samples, o.row, o.timing, tuple(o.state_names), o.orbits)
 
 
 class Consolidator:
@@ -210,14 +207,12 @@ class Consolidator:
 
     def __init__(self, experiment: Experiment, store: Store, out: Path, summarize=None,
                  keys: dict | None = None, costs: dict | None = None):
-        from gnibench.suite.runs.tables import samples_table
-
         self.experiment, self.store, self.out, self.summarize = experiment, store, out, summarize
         self.keys = keys if keys is not None else {c.id: cell_key(c) for c in experiment.cells}
         self.key_set = set(self.keys.values())
         self.dirty = False          # a cell of this experiment finished since the last write
         self.state_names = experiment_states(experiment)
-        self.empty_samples = samples_table([])
+        self.ensembles = any(c.ensemble is not None for c in experiment.cells)
         self.last_write = time.perf_counter()
         # what the last write of each experiment of the run took (shared by the run's writers)
         self.costs = {} if costs is None else costs
@@ -241,12 +236,13 @@ class Consolidator:
 
         t0 = time.perf_counter()
         out = self.out
-        parts = {c.id: restamp(self.store.read(self.keys[c.id]), c) for c in self.experiment.cells
+        cells = self.experiment.cells
+        parts = {c.id: restamp(self.store.read(self.keys[c.id]), c) for c in cells
                  if self.keys[c.id] in done}
         parts = {k: p for k, p in parts.items() if p is not None}
-        samples = samples_table([(p.samples, p.state_names) for p in parts.values()
-                                 if p.samples is not None], self.state_names)
-        cells = self.experiment.cells
+        by_id = {c.id: c for c in cells}
+        samples = samples_table([(by_id[i], p.samples, p.state_names) for i, p in parts.items()
+                                 if p.samples is not None], self.state_names, self.ensembles)
         rows = [parts[c.id].row if c.id in parts else cell_row(c) for c in cells]
         timings = [parts[c.id].timing if c.id in parts else timing_row(c) for c in cells]
         meta = provenance(self.experiment, len(parts))
@@ -274,13 +270,12 @@ class Consolidator:
 
 def restamp(part: Part | None, cell) -> Part | None:
     """A stored part as a cell of this experiment: its id, group and label (a part is keyed by
-    what determines its numbers, so one part may serve cells of several experiments)."""
+    what determines its numbers, so one part may serve cells of several experiments; the samples
+    get the cell's id when the table is made)."""
     if part is None:
         return None
     part.row.update(cell=cell.id, group=cell.group, label=cell.label)
     part.timing.update(cell=cell.id)
-    if part.samples is not None:
-        part.samples["cell"] = np.int64(cell.id)
     return part
 
 

@@ -1,42 +1,59 @@
-"""The resumable store of a results directory: one committed part per finished cell.
+"""The resumable store of a results directory: one record per finished cell, appended.
 
 Layout of ``<out>/``::
 
     .lock                      held (flock) by the run using the directory
-    parts/<key>.parquet        one finished cell: its samples, with its cells row and timings row
-                               in the schema metadata; written to a temporary file and renamed,
-                               so a part exists whole or not at all
+    parts/NNNNNN.seg           segments: the records of finished cells, appended by the run that
+                               computed them (one segment per run; :mod:`.partfile`)
     samples.parquet, cells.parquet, timings.parquet
                                consolidated from the parts, in cell order (rewritten as cells
                                finish and at the end)
 
 The key of a part is a content hash of everything that determines its numbers: the canonical cell
-(problem and method specs, horizon, sampling, metrics, reference solution; the text of a user
-definition, :mod:`gnibench.suite.cell.user`), the source code that computes it
-(problems, methods and their kernels, the cell layer, the metrics and the tables: a fingerprint of
-those files) and the package versions. Running the same experiment again reuses every part whose
-key matches and computes only the missing cells; a cell whose spec or code changed gets a new key
-and is recomputed, never reused stale. Parts are verified when read: a part that cannot be read, or
-whose content does not match the checksum it carries (:func:`content_checksum`, in its metadata),
-is discarded with one warning line and recomputed.
+(problem and method specs, horizon, sampling, metrics, reference solution, an ensemble's initial
+conditions; the text of a user definition, :mod:`gnibench.suite.cell.user`), the source code that
+computes it (problems, methods and their kernels, the cell layer, the metrics and the tables: a
+fingerprint of those files) and the package versions. Running the same experiment again reuses
+every part whose key matches and computes only the missing cells; a cell whose spec or code
+changed gets a new key and is recomputed, never reused stale.
+
+**Committed as it finishes.** A finished cell is appended to the run's segment as one record and
+flushed to the operating system before the next cell is counted: after ``kill -9`` every record
+written whole is there; a record cut short ends its segment and its cell is computed again. A
+later record of a key replaces an earlier one (a cell in ``error`` recomputed).
+
+**Verified when read.** A record carries the sha256 of its part, checked when a later run reads
+it: a part whose bytes do not match (one flipped bit), or that cannot be read, is recomputed with
+one warning line, and its new record replaces it. A segment whose records cannot be followed (a
+damaged head) warns once; the cells after that point are recomputed.
+
+**Cheap.** What a finished cell costs this process (the parent of the workers): one encoding of
+its columns and rows, one digest, one append to an open file (a file created per cell cost more
+than the rest together); the run keeps the part in memory and makes its tables from it, never
+reading back what it wrote. A later run reads the heads of the records once (a walk over the
+segments) and each part it needs once. When more than half of the stored bytes are replaced or
+damaged records (``--fresh`` runs, say), the live records are copied into one new segment and the
+old segments removed (:meth:`Store.compact`).
 """
 from __future__ import annotations
 
 import hashlib
 import json
 import os
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Self
 
 from gnibench.suite.foundation.cache import discard, warn
 from gnibench.suite.foundation.errors import UserError
 from gnibench.suite.foundation.provenance import versions
+from gnibench.suite.runs.partfile import FORMAT as PART_FORMAT
+from gnibench.suite.runs.partfile import HEAD, KEY, MAGIC, Damaged, Entry, Part, encode, load, scan
+
+SUFFIX = ".seg"
 
 #: what the numbers of a cell depend on (folders and files of the package, relative to its root)
 CODE = ("problems", "methods", "suite/foundation", "suite/cell", "suite/metrics",
         "suite/runs/tables.py")
-PART_FORMAT = 2             # 2: a checksum of the content in the metadata
 
 
 def package_root() -> Path:
@@ -83,16 +100,6 @@ def cell_key(cell) -> str:
     return hashlib.sha256(json.dumps(doc, sort_keys=True, default=str).encode()).hexdigest()[:32]
 
 
-@dataclass
-class Part:
-    """A finished cell as stored: its samples (or None), its cells row and timings row."""
-
-    samples: object
-    row: dict
-    timing: dict
-    state_names: tuple[str, ...]
-
-
 class Store:
     """A results directory opened by one run (see the module docstring)."""
 
@@ -100,7 +107,11 @@ class Store:
         self.out = Path(out)
         self.parts = self.out / "parts"
         self._lock = None
-        self._memo: dict[str, Part] = {}      # parts this run has read (each read once)
+        self._memo: dict[str, Part] = {}      # parts this run has read or written
+        self._index: dict[str, Entry] = {}    # key -> where its latest record lies
+        self._files: dict[str, object] = {}   # segment name -> open file (reading)
+        self._segment = None                  # this run's segment (appending), made on demand
+        self._sizes: dict[str, int] = {}      # segment name -> bytes
 
     # -- the lock ---------------------------------------------------------------------------------
 
@@ -124,6 +135,8 @@ class Store:
         lock.acquire()
         self._lock = lock
         self.clean_temporary()
+        self._scan()
+        self.compact()
         return self
 
     @staticmethod
@@ -144,6 +157,10 @@ class Store:
         probe(out, f"-o {out}")
 
     def close(self) -> None:
+        for f in [*self._files.values(), self._segment]:
+            if f is not None:
+                f.close()
+        self._files, self._segment = {}, None
         if self._lock is not None:
             self._lock.release()
             self._lock = None
@@ -162,116 +179,111 @@ class Store:
             for f in d.glob(".*.tmp*"):
                 f.unlink(missing_ok=True)
                 removed += 1
+        for f in self.parts.glob("*.parquet"):      # parts of format 2: never read again
+            f.unlink(missing_ok=True)
         return removed
+
+    # -- segments ---------------------------------------------------------------------------------
+
+    def _segments(self) -> list[Path]:
+        return sorted(p for p in self.parts.glob(f"*{SUFFIX}") if p.stem.isdigit())
+
+    def _scan(self) -> None:
+        """Index the records of every segment, oldest first (a later record of a key wins)."""
+        for path in self._segments():
+            try:
+                f = open(path, "rb")  # noqa: SIM115 - kept open while the store is
+            except OSError as e:
+                warn(f"stored cells {path.relative_to(self.out)} cannot be read ({e.strerror}); "
+                     f"their cells are recomputed")
+                continue
+            entries, stop = scan(f, path.name)
+            if stop == "damaged":
+                warn(f"stored cells {path.relative_to(self.out)} are damaged after "
+                     f"{len(entries)} records; the cells after them are recomputed")
+            self._files[path.name] = f
+            self._sizes[path.name] = f.seek(0, 2)
+            self._index.update(entries)
+
+    def compact(self, threshold: float = 0.5, least: int = 1 << 20) -> bool:
+        """Copy the live records into one new segment and remove the others when replaced,
+        damaged or cut-short bytes are more than ``threshold`` of the segments' bytes (and at
+        least ``least`` bytes). A kill meanwhile leaves records twice, the same bytes: harmless."""
+        total = sum(self._sizes.values())
+        live = sum(e.length + HEAD for e in self._index.values())
+        if total - live <= max(threshold * total, least):
+            return False
+        old = list(self._files)
+        moved: dict[str, Entry] = {}
+        for key, e in self._index.items():
+            f = self._files[e.segment]
+            f.seek(e.offset - HEAD)
+            moved[key] = self._append(f.read(HEAD + e.length), key)
+        self._segment.flush()
+        for name in old:
+            self._files.pop(name).close()
+            (self.parts / name).unlink(missing_ok=True)
+            self._sizes.pop(name, None)
+        self._index = moved
+        return True
+
+    def _append(self, data: bytes, key: str) -> Entry:
+        """Append a record to this run's segment (a new one, after the last): where its part is."""
+        if self._segment is None:
+            last = max((int(p.stem) for p in self._segments()), default=0)
+            path = self.parts / f"{last + 1:06d}{SUFFIX}"
+            self._segment = open(path, "xb")  # noqa: SIM115 - appended to until close
+            self._files[path.name] = open(path, "rb")  # noqa: SIM115
+            self._sizes[path.name] = 0
+        name = Path(self._segment.name).name
+        at = self._sizes[name]
+        self._segment.write(data)
+        self._sizes[name] = at + len(data)
+        return Entry(name, at + HEAD, len(data) - HEAD, data[len(MAGIC) + KEY:HEAD - 8])
 
     # -- parts ------------------------------------------------------------------------------------
 
-    def path(self, key: str) -> Path:
-        return self.parts / f"{key}.parquet"
-
     def has(self, key: str) -> bool:
-        return self.path(key).is_file()
+        return key in self._index
 
-    def write(self, key: str, part: Part, empty_samples) -> None:
-        """Commit one finished cell atomically, with the checksum of its content."""
-        from gnibench.suite.runs.storage import write_parquet
-
-        samples = part.samples if part.samples is not None else empty_samples
-        meta = {"part_format": PART_FORMAT, "key": key, "row": part.row, "timing": part.timing,
-                "state_names": list(part.state_names), "has_samples": part.samples is not None}
-        meta = json.loads(json.dumps(meta, default=str))       # as it will be read back
-        meta["checksum"] = content_checksum(meta, part.samples)
-        self._memo.pop(key, None)          # a part read before (in error, say) is replaced
-        write_parquet(samples, self.path(key), meta)
+    def write(self, key: str, part: Part) -> Part:
+        """Commit one finished cell: its record appended to this run's segment and flushed to the
+        operating system. Returns the part as a later run reads it back, which this run's tables
+        are made of too (so a resumed run's tables are the same bytes)."""
+        data, back = encode(key, part)
+        entry = self._append(data, key)
+        self._segment.flush()
+        self._index[key] = entry
+        self._memo[key] = back
+        return back.copy()
 
     def read(self, key: str) -> Part | None:
-        """A stored part, or None when it is missing or damaged (then it is discarded, with one
-        warning line: it cannot be read, or its content does not match its checksum).
+        """A stored part, or None when it is missing or damaged (then one warning line: it cannot
+        be read, or its content does not match its digest; the cell is recomputed and its new
+        record replaces this one).
 
-        A part read before by this run is returned from memory, as a copy (its rows are
-        re-stamped with each experiment's cell ids): a run over several experiments, or one that
-        consolidates its tables many times, reads each part from the disk once (and the tables
-        are built from what the disk holds, whether the part was computed now or before)."""
-        path = self.path(key)
-        if key in self._memo and path.is_file():
-            p = self._memo[key]
-            return Part(None if p.samples is None else p.samples.copy(deep=False), dict(p.row),
-                        dict(p.timing), p.state_names)
-        if not path.exists():
+        A part read or written before by this run is returned from memory, as a copy (its rows
+        are re-stamped with each experiment's cell ids): a run over several experiments, or one
+        that consolidates its tables many times, reads each part from the disk once."""
+        if key in self._memo:
+            return self._memo[key].copy()
+        entry = self._index.get(key)
+        if entry is None:
             return None
-        part = self._load(key, path)
-        if part is None:
-            return None
-        self._memo[key] = part
-        return Part(None if part.samples is None else part.samples.copy(deep=False),
-                    dict(part.row), dict(part.timing), part.state_names)
-
-    def _load(self, key: str, path: Path) -> Part | None:
-        import pandas as pd
-        from gnibench.suite.runs.storage import read_parquet_meta
-
+        where = f"{(self.parts / entry.segment).relative_to(self.out)} (cell {key})"
         try:
-            meta = read_parquet_meta(path)
-            if meta.get("key") != key or meta.get("part_format") != PART_FORMAT:
-                raise ValueError("it is not the part of this cell")
-            samples = pd.read_parquet(path) if meta["has_samples"] else None
-            stored = meta.pop("checksum", None)
-            if stored != content_checksum(meta, samples):
-                warn(f"stored cell {path.relative_to(self.out)} does not match its checksum "
-                     f"(damaged or modified); discarded and recomputed")
-                discard(path)
-                return None
-            return Part(samples, _restore(meta["row"]), _restore(meta["timing"]),
-                        tuple(meta["state_names"]))
+            part = load(self._files[entry.segment], entry, key)
+        except Damaged:
+            warn(f"stored cell in {where} does not match its checksum (damaged or modified); "
+                 f"recomputed")
+            part = None
         except Exception as e:  # noqa: BLE001 - a damaged part is recomputed, whatever the damage
             why = " ".join(str(e).split())[:120] or type(e).__name__
-            warn(f"stored cell {path.relative_to(self.out)} cannot be read ({why}); discarded "
-                 f"and recomputed")
-            discard(path)
+            warn(f"stored cell in {where} cannot be read ({why}); recomputed")
+            part = None
+        if part is None:
+            del self._index[key]
             return None
+        self._memo[key] = part
+        return part.copy()
 
-
-def content_checksum(meta: dict, samples) -> str:
-    """sha256 of a part's content: its metadata (canonical JSON, without the checksum) and its
-    samples, column by column (name, then the values: numbers as little-endian 8-byte words,
-    anything else as text), so that one flipped bit in a value, a name or a row is seen."""
-    import numpy as np
-
-    h = hashlib.sha256(json.dumps(meta, sort_keys=True, default=str).encode())
-    if samples is None:
-        return h.hexdigest()
-    h.update(f"rows {len(samples)}\n".encode())
-    for name in samples.columns:
-        column = samples[name]
-        h.update(f"column {name}\n".encode())
-        kind = column.dtype.kind if isinstance(column.dtype, np.dtype) else "O"
-        if kind in "iub":
-            h.update(np.ascontiguousarray(column.to_numpy(), dtype="<i8").tobytes())
-        elif kind == "f":
-            h.update(np.ascontiguousarray(column.to_numpy(), dtype="<f8").tobytes())
-        else:
-            h.update(_text_bytes(column.astype(object).tolist()))
-    return h.hexdigest()
-
-
-def _text_bytes(values: list) -> bytes:
-    """The bytes :func:`content_checksum` hashes for a column of text (or other objects):
-    ``str(v)`` in UTF-8 then ``\\x01`` for each value, ``\\x00`` for a missing one. A column
-    without a missing value (every stored part: its problem and method, one per row) is joined at
-    once (a part of 2001 rows: 0.36 ms for its checksum, 0.99 ms value by value)."""
-    import pandas as pd
-
-    def missing(v) -> bool:
-        return v is None or (not isinstance(v, str) and bool(pd.isna(v)))
-
-    if not values:
-        return b""
-    if all(isinstance(v, str) for v in values):
-        return ("\x01".join(values) + "\x01").encode()
-    return b"".join(b"\x00" if missing(v) else str(v).encode() + b"\x01" for v in values)
-
-
-def _restore(d: dict) -> dict:
-    """JSON null -> NaN for the float columns of a row (JSON has no NaN)."""
-    return {k: (float("nan") if v is None and k not in ("steps", "samples", "cache_misses")
-                else v) for k, v in d.items()}

@@ -78,30 +78,14 @@ def sample_columns(traj, metrics) -> dict[str, np.ndarray]:
     return out
 
 
-def cell_samples(cell, traj, metrics) -> pd.DataFrame:
-    """The samples of one cell of an experiment: its ``gnibench solve`` table plus the cell id
-    and specs."""
-    return cell_frame(cell, cell_sample_columns(traj, metrics))
-
-
 def cell_sample_columns(traj, metrics) -> dict[str, np.ndarray]:
-    """The columns of :func:`cell_samples` but the cell id and specs, as arrays (what a pool
-    worker sends: it builds no DataFrame, so it never imports pandas)."""
-    clash = set(traj.state_names) & set(SAMPLE_FRONT + ("global_error",))
+    """The samples of one cell of an experiment as columns (its ``gnibench solve`` table; the
+    cell id and specs are added when the tables are made, :func:`samples_table`): what a worker
+    sends and the store keeps, so a worker never builds a DataFrame or imports pandas."""
+    clash = set(traj.state_names) & set(SAMPLE_FRONT + ("global_error", "orbit"))
     if clash:
         raise ValueError(f"state names {sorted(clash)} clash with the fixed sample columns")
     return sample_columns(traj, metrics)
-
-
-def cell_frame(cell, columns: dict[str, np.ndarray]) -> pd.DataFrame:
-    """The samples table of one cell from :func:`cell_sample_columns`."""
-    import pandas as pd
-
-    df = pd.DataFrame(columns)
-    df.insert(0, "cell", np.int64(cell.id))
-    df.insert(1, "problem", cell.problem)
-    df.insert(2, "method", cell.method)
-    return df
 
 
 def cell_row(cell, traj=None, metrics=None, status: str = "pending", reason: str = "",
@@ -148,36 +132,49 @@ def timing_row(cell, traj=None, status: str = "pending") -> dict:
     return row
 
 
-def samples_table(parts: list[tuple[pd.DataFrame, tuple[str, ...]]],
-                  all_states: tuple[str, ...] = ()) -> pd.DataFrame:
-    """Concatenate cell samples in cell order: fixed columns, states, err_*, global_error, then
-    the other metric columns. ``parts`` are (samples of a cell, its problem's state names);
-    ``all_states`` the states of every problem of the experiment, so that a partial table has the
-    columns of problems not run yet.
+def samples_table(parts: list[tuple[object, dict, tuple[str, ...]]],
+                  all_states: tuple[str, ...] = (), orbits: bool = False) -> pd.DataFrame:
+    """The samples of an experiment, in cell order: fixed columns, states, err_*, global_error,
+    then the other metric columns. ``parts`` are (cell, its sample columns, its problem's state
+    names); ``all_states`` the states of every problem of the experiment, so that a partial table
+    has the columns of problems not run yet; ``orbits``: the experiment has ensemble cells, whose
+    kept orbits' samples carry their ``orbit`` (a nullable integer, empty for the other cells).
 
     States and integrals are the union over the cells, in order of first appearance; a column a
-    cell's problem lacks is NaN in that cell's rows.
+    cell's problem lacks is NaN in that cell's rows. The table is made once from the columns
+    (one array per column, concatenated), never a DataFrame per cell.
     """
     import pandas as pd
 
-    parts = sorted(parts, key=lambda p: int(p[0]["cell"].iloc[0]) if len(p[0]) else -1)
-    empty = pd.DataFrame({c: pd.Series(dtype=t) for c, t in zip(
-        SAMPLE_FRONT, ("int64", "object", "object", "float64", "int64", "float64"))})
+    parts = sorted(parts, key=lambda p: p[0].id)
+    sizes = [len(next(iter(cols.values()))) if cols else 0 for _, cols, _ in parts]
     states: list[str] = list(all_states)
-    for _, names in parts:
+    seen: dict[str, None] = {}
+    for _, cols, names in parts:
         states += [s for s in names if s not in states]
-    df = pd.concat([f for f, _ in parts], ignore_index=True) if parts else empty
-    for s in states:
-        if s not in df.columns:
-            df[s] = pd.Series(float("nan"), index=df.index, dtype="float64")
-    for c in SAMPLE_FRONT:               # section crossings have no steps / nfev columns
-        if c not in df.columns:
-            df[c] = pd.Series(float("nan"), index=df.index, dtype="float64")
-    errors = [c for c in df.columns if c.startswith("err_")]
-    tail = ["global_error"] if "global_error" in df.columns else []
-    rest = [c for c in df.columns if c not in SAMPLE_FRONT and c not in states
-            and c not in errors and c not in tail]
-    return missing_steps(df[list(SAMPLE_FRONT) + states + errors + tail + rest].copy())
+        seen.update(dict.fromkeys(cols))
+    front = list(SAMPLE_FRONT)
+    if orbits:
+        front.insert(1, "orbit")
+    names = [c for c in seen if c not in front and c not in states]
+    errors = [c for c in names if c.startswith("err_")]
+    tail = ["global_error"] if "global_error" in names else []
+    rest = [c for c in names if c not in errors and c not in tail]
+    out: dict[str, object] = {
+        "cell": np.repeat(np.array([c.id for c, _, _ in parts], dtype=np.int64), sizes),
+        "problem": np.repeat(np.array([c.problem for c, _, _ in parts], dtype=object), sizes),
+        "method": np.repeat(np.array([c.method for c, _, _ in parts], dtype=object), sizes)}
+    if orbits:
+        orbit = [cols.get("orbit") for _, cols, _ in parts]
+        values = np.concatenate([np.full(n, -1, np.int64) if o is None else o.astype(np.int64)
+                                 for o, n in zip(orbit, sizes)]) if parts else np.zeros(0, np.int64)
+        out["orbit"] = pd.arrays.IntegerArray(values, values < 0)
+    kinds = {"t": np.float64, "steps": np.int64, "nfev": np.float64}
+    for c in front[1 + orbits + 2:] + states + errors + tail + rest:
+        arrays = [cols[c] if c in cols else np.full(n, np.nan) for (_, cols, _), n
+                  in zip(parts, sizes)]
+        out[c] = np.concatenate(arrays) if arrays else np.zeros(0, kinds.get(c, np.float64))
+    return missing_steps(pd.DataFrame(out, columns=front + states + errors + tail + rest))
 
 
 _CELL_COLUMNS = ("cell", "group", "label", "problem", "method", "method_kind", "h", "t_end", "steps_planned",

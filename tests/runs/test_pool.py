@@ -12,10 +12,10 @@ import subprocess
 import sys
 from types import SimpleNamespace
 
-import pandas as pd
+import numpy as np
 import pytest
 from gnibench.suite.foundation.outputs import Fault
-from gnibench.suite.runs.cellwork import run_cell, with_frame
+from gnibench.suite.runs.cellwork import run_cell
 from gnibench.suite.runs.experiment import parse_experiment
 from gnibench.suite.runs.pool import Plan, Pool, longest_first
 from gnibench.suite.runs.runner import _groups
@@ -65,14 +65,19 @@ def test_plan_compiles_once_keeps_kernels_home_and_helps_last():
     assert plan.next_for(0) is None and plan.next_for(1) is None
 
 
-def test_outcome_as_columns_gives_the_same_table():
+def test_outcome_columns_make_the_table_of_the_cell():
+    """A cell's samples travel as columns; the table made of them has the cell's id and specs in
+    front and the columns' values as they are."""
+    from gnibench.suite.runs.tables import samples_table
+
     cell = cells()[0]
-    framed = run_cell(cell)
-    columns = run_cell(cell, frames=False)
-    assert isinstance(columns.samples, dict)
-    rebuilt = with_frame(columns).samples
-    pd.testing.assert_frame_equal(rebuilt, framed.samples, check_exact=True)
-    assert list(rebuilt.dtypes) == list(framed.samples.dtypes)
+    outcome = run_cell(cell)
+    assert isinstance(outcome.samples, dict)
+    table = samples_table([(cell, outcome.samples, outcome.state_names)])
+    assert list(table.columns[:6]) == ["cell", "problem", "method", "t", "steps", "nfev"]
+    assert (table["cell"] == cell.id).all() and (table["method"] == cell.method).all()
+    for name, values in outcome.samples.items():
+        assert np.array_equal(table[name].to_numpy(), values), name
 
 
 def test_a_worker_runs_cells_without_pandas():
@@ -80,7 +85,7 @@ def test_a_worker_runs_cells_without_pandas():
             "from gnibench.suite.runs.cellwork import run_cell; "
             "from gnibench.suite.runs.experiment import parse_experiment; "
             f"cell = parse_experiment({SMALL!r}, 's.toml').cells[0]; "
-            "mods = set(sys.modules); o = run_cell(cell, frames=False); "
+            "mods = set(sys.modules); o = run_cell(cell); "
             "assert o.status == 'ok', o.reason; "
             "print(sorted(m for m in set(sys.modules) - mods if m.split('.')[0] in "
             "('pandas', 'pyarrow')))")
@@ -105,7 +110,9 @@ def test_pool_runs_every_cell_once_and_leaves_nothing():
         assert len(p.started()) == 2
         outcomes = list(p.run(_groups(todo)))
     assert sorted(o.cell.id for o in outcomes) == [c.id for c in todo]
-    assert all(o.status == "ok" and isinstance(o.samples, pd.DataFrame) for o in outcomes)
+    assert all(o.status == "ok" and isinstance(o.samples, dict) for o in outcomes)
+    # the caller's own cells come back (the parent keys them by identity)
+    assert {id(o.cell) for o in outcomes} == {id(c) for c in todo}
     assert _children() == before
 
 
@@ -160,10 +167,10 @@ def test_a_dead_worker_fails_the_run_with_its_cell(monkeypatch):
 
     original = cellwork.run_cell
 
-    def dying(cell, report=None, frames=True):
+    def dying(cell, report=None):
         if cell.id == 4:
             os._exit(3)                                        # killed, out of memory, ...
-        return original(cell, report, frames=frames)
+        return original(cell, report)
 
     monkeypatch.setattr(cellwork, "run_cell", dying)           # inherited by the fork
     before = _children()

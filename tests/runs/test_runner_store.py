@@ -58,6 +58,27 @@ def _tables(out: Path) -> dict[str, bytes]:
     return {name: (out / name).read_bytes() for name in TABLES}
 
 
+def _records(out: Path) -> int:
+    """The records of finished cells in the store's segments (a record cut short not counted)."""
+    from gnibench.suite.runs.partfile import scan
+
+    total = 0
+    for seg in (out / "parts").glob("*.seg"):
+        with open(seg, "rb") as f:
+            total += len(scan(f, seg.name)[0])
+    return total
+
+
+def _record_of(segment: Path, k: int) -> bytes:
+    """The bytes of the k-th record of a segment."""
+    from gnibench.suite.runs.partfile import HEAD, scan
+
+    with open(segment, "rb") as f:
+        entries = sorted(scan(f, segment.name)[0].values(), key=lambda e: e.offset)
+    e = entries[k]
+    return segment.read_bytes()[e.offset - HEAD:e.offset + e.length]
+
+
 def test_kill_9_then_resume_reuses_cells_and_gives_identical_tables(tmp_path):
     exp = _write(tmp_path, SLOW, "slow")
     whole, killed = tmp_path / "whole", tmp_path / "killed"
@@ -68,17 +89,19 @@ def test_kill_9_then_resume_reuses_cells_and_gives_identical_tables(tmp_path):
         proc = subprocess.Popen(GNIBENCH + ["run", str(exp), "-o", str(killed), "-j", "1", "--no-report"],
                                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         deadline = time.monotonic() + 600            # a safety net against a hang only
-        while len(list((killed / "parts").glob("*.parquet"))) < 2 and proc.poll() is None:
+        while _records(killed) < 2 and proc.poll() is None:
             assert time.monotonic() < deadline
             time.sleep(0.02)
         proc.send_signal(signal.SIGSTOP)
-        stored = len(list((killed / "parts").glob("*.parquet")))
+        stored = _records(killed)
         proc.send_signal(signal.SIGKILL)
         proc.wait()
         if stored < 6:           # else a loaded machine let it finish first: try again
             break
     assert 2 <= stored < 6
     (killed / "parts" / ".abc.parquet.tmp999").write_bytes(b"half a part")   # as a kill leaves
+    segment = max((killed / "parts").glob("*.seg"))           # and a record cut short
+    segment.write_bytes(segment.read_bytes() + _record_of(segment, 0)[:150])
     again = subprocess.run(GNIBENCH + ["run", str(exp), "-o", str(killed), "-j", "1", "--no-report"],
                            check=True, capture_output=True, text=True)
     assert f"({stored} reused from the store, {6 - stored} to compute)" in again.stderr
@@ -113,16 +136,50 @@ def test_changed_spec_or_code_is_recomputed(tmp_path, capsys, monkeypatch):
     assert "(0 reused from the store, 8 to compute)" in capsys.readouterr().err
 
 
-def test_a_damaged_part_is_recomputed(tmp_path, capsys):
+def test_a_damaged_record_head_is_said_once_and_the_cells_after_it_are_recomputed(tmp_path,
+                                                                                  capsys):
     exp = _write(tmp_path, TINY, "tiny")
     out = tmp_path / "out"
     assert main(["run", str(exp), "-o", str(out), "-j", "1", "--no-report"]) == 0
     first = _tables(out)
-    part = sorted((out / "parts").glob("*.parquet"))[3]
-    part.write_bytes(part.read_bytes()[:100])
+    segment = max((out / "parts").glob("*.seg"))
+    fourth = _record_of(segment, 3)
+    raw = segment.read_bytes()
+    at = raw.index(fourth)
+    segment.write_bytes(raw[:at] + b"X" + raw[at + 1:])      # the head of the 4th record
     capsys.readouterr()
     assert main(["run", str(exp), "-o", str(out), "-j", "1", "--no-report"]) == 0
-    assert "(7 reused from the store, 1 to compute)" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    warnings = [ln for ln in err.splitlines() if ln.startswith("gnibench: warning:")]
+    assert len(warnings) == 1 and "damaged after 3 records" in warnings[0]
+    assert "(3 reused from the store, 5 to compute)" in err
+    assert _tables(out) == first
+    capsys.readouterr()
+    assert main(["run", str(exp), "-o", str(out), "-j", "1", "--no-report"]) == 0
+    err = capsys.readouterr().err
+    assert "(8 reused from the store, 0 to compute)" in err        # the new records replace them
+    assert len([ln for ln in err.splitlines() if "warning" in ln]) == 1    # said again, once
+
+
+def test_replaced_records_are_compacted(tmp_path, capsys):
+    """--fresh runs append new records of the same keys; once most stored bytes are replaced ones,
+    the live records are copied into one segment and the old segments removed; nothing changes in
+    the tables or in what is reused."""
+    from gnibench.suite.runs.store import Store
+
+    exp = _write(tmp_path, TINY, "tiny")
+    out = tmp_path / "out"
+    for _ in range(3):
+        assert main(["run", str(exp), "-o", str(out), "-j", "1", "--fresh", "--no-report"]) == 0
+    first = _tables(out)
+    assert len(list((out / "parts").glob("*.seg"))) == 3
+    with Store(out) as store:                 # below the size threshold: kept as they are
+        assert len(store._index) == 8
+        assert store.compact(least=0)
+    assert len(list((out / "parts").glob("*.seg"))) == 1 and _records(out) == 8
+    capsys.readouterr()
+    assert main(["run", str(exp), "-o", str(out), "-j", "1", "--no-report"]) == 0
+    assert "(8 reused from the store, 0 to compute)" in capsys.readouterr().err
     assert _tables(out) == first
 
 
@@ -183,69 +240,30 @@ def test_ctrl_c_stops_a_long_solve_and_keeps_the_samples(tmp_path):
 
 
 def test_a_flipped_bit_in_a_stored_part_is_recomputed_with_one_warning(tmp_path, capsys):
-    """One bit of one sample value inside a part, the file still readable: the part's checksum
+    """One bit of one sample value inside a record, the segment still readable: the part's digest
     no longer matches its content; it is recomputed, and the tables are as before."""
     import struct
 
-    import numpy as np
     import pandas as pd
 
     exp = _write(tmp_path, TINY, "tiny")
     out = tmp_path / "out"
     assert main(["run", str(exp), "-o", str(out), "-j", "1", "--no-report"]) == 0
     first = _tables(out)
-    flipped = None
-    for part in sorted((out / "parts").glob("*.parquet")):
-        raw = bytearray(part.read_bytes())
-        before = pd.read_parquet(part).select_dtypes("float64")
-        for column, v in ((c, v) for c in before.columns for v in before[c].to_numpy()):
-            needle = struct.pack("<d", v)
-            if v != 0 and raw.count(needle) == 1:
-                raw[raw.index(needle)] ^= 1
-                part.write_bytes(bytes(raw))
-                flipped = part
-                break
-        if flipped:
-            break
-    assert flipped is not None, "no sample value stored verbatim"
-    after = pd.read_parquet(flipped)[column].to_numpy()       # readable, one value changed
-    assert np.count_nonzero(after != before[column].to_numpy()) == 1
+    samples = pd.read_parquet(out / "samples.parquet")
+    segment = max((out / "parts").glob("*.seg"))
+    raw = bytearray(segment.read_bytes())
+    needle = next(struct.pack("<d", v) for v in samples["q1"].dropna().to_numpy()
+                  if v != 0 and raw.count(struct.pack("<d", v)) == 1)
+    raw[raw.index(needle)] ^= 1
+    segment.write_bytes(bytes(raw))
     capsys.readouterr()
     assert main(["run", str(exp), "-o", str(out), "-j", "1", "--no-report"]) == 0
     err = capsys.readouterr().err
     warnings = [ln for ln in err.splitlines() if ln.startswith("gnibench: warning:")]
-    assert len(warnings) == 1 and flipped.name in warnings[0] and "checksum" in warnings[0]
+    assert len(warnings) == 1 and segment.name in warnings[0] and "checksum" in warnings[0]
     assert "(7 reused from the store, 1 to compute)" in err
     assert _tables(out) == first
-
-
-@pytest.mark.parametrize("values", [["kepler-2d"] * 3, [], ["a", None, "\u00fc", float("nan"), 3,
-                                                            "y\x01", "", 2.5]])
-def test_a_text_column_is_hashed_value_by_value(values):
-    """The checksum's text columns: ``str(v)`` in UTF-8 and ``\\x01`` per value, ``\\x00`` for a
-    missing one (the definition stored parts were written with), whether the column is joined
-    at once (all text) or value by value; a value moved from one row to the next changes it."""
-    import hashlib
-
-    import pandas as pd
-
-    def by_value(vals):
-        h = hashlib.sha256()
-        for v in vals:
-            h.update(b"\x00" if v is None or (not isinstance(v, str) and pd.isna(v))
-                     else str(v).encode() + b"\x01")
-        return h.hexdigest()
-
-    assert hashlib.sha256(store_module._text_bytes(values)).hexdigest() == by_value(values)
-    for dtype in (object, "str"):
-        if dtype == "str" and not all(isinstance(v, str) for v in values):
-            continue
-        frame = pd.DataFrame({"m": pd.Series(values, dtype=dtype)})
-        assert store_module.content_checksum({}, frame) == store_module.content_checksum(
-            {}, pd.DataFrame({"m": pd.Series(values, dtype=object)}))
-    if len(values) > 1 and values[0] != values[1]:
-        swapped = [values[1], values[0], *values[2:]]
-        assert store_module._text_bytes(swapped) != store_module._text_bytes(values)
 
 
 def test_plain_progress_lines_when_not_a_terminal(tmp_path):
