@@ -83,7 +83,7 @@ class Results:
 
 
 def _sample_columns(figure: dict) -> list[str]:
-    cols = {"cell", "t"}
+    cols = {"cell", "orbit", "t"}         # orbit: the samples of an ensemble's orbits
     for panel in figure.get("panels", []):
         for curve in panel.get("curves", []):
             cols.update((curve["x"], curve["y"], *curve.get("where", {})))

@@ -200,14 +200,27 @@ def _pieces(x: np.ndarray, y: np.ndarray, jump: float = 10.0):
     return xs, ys, origins
 
 
+def point_set(results, curve: dict) -> list[tuple[int, object]]:
+    """The points of a set, in order: (cell, its samples) for each cell of the curve, or for an
+    ensemble cell (samples with an ``orbit``) each of its orbits in orbit order."""
+    members = []
+    for c in curve["cells"]:
+        df = where(results.cell_samples(c), curve.get("where"))
+        if "orbit" in df.columns and df["orbit"].notna().any():
+            members += [(c, part) for _, part in df.groupby("orbit", sort=True)]
+        else:
+            members.append((c, df))
+    return members
+
+
 def _draw_sets(ax, results, curve: dict, out: dict, logx: bool, logy: bool) -> dict:
     """The images of a point set: one shape per time of ``at`` (a closed polygon, or points)."""
     color = curve_color(curve)
-    frames = [where(results.cell_samples(c), curve.get("where")) for c in curve["cells"]]
+    members = point_set(results, curve)
     out["shapes"] = []
     for n, t in enumerate(curve["at"]):
         xs, ys = [], []
-        for cell, df in zip(curve["cells"], frames):
+        for cell, df in members:
             k = at_times(df, [t])[0]
             if k is None:
                 out["missing"].append(cell)

@@ -130,19 +130,41 @@ def _header(n: int, newton_maxit: int = 50, compensated: bool = False) -> str:
 _sources: dict[tuple, tuple] = {}
 
 
-def module_source(problem, method_cfg, keyed: bool = False) -> tuple[str, dict]:
+def module_source(problem, method_cfg, keyed: bool = False, batched: str = "") -> tuple[str, dict]:
     """The full text of a cell's module, and the problem metadata. ``keyed``: the text is only
-    hashed into the kernel key (:attr:`Context.keyed`).
+    hashed into the kernel key (:attr:`Context.keyed`); ``batched``: the name of a single-orbit
+    driver, whose batched copy (``batch_<driver>``, methods/kernels/ensemble.py) is appended (the
+    module of an ensemble cell; other cells' modules are unchanged).
 
     The text depends on the problem's record and the method (its canonical text and records), not
     on the problem's option values: it is made once per process for each such pair (a matrix
     over initial values or parameters asks for it once per cell)."""
     records = (problem.record, method_cfg.base.record, *(m.record for m in method_cfg.modifiers))
-    key = (tuple(id(r) for r in records), method_cfg.text(), keyed)
+    key = (tuple(id(r) for r in records), method_cfg.text(), keyed, batched)
     memo = _sources.get(key)
     if memo is None or any(a is not b for a, b in zip(memo[0], records)):
-        memo = _sources[key] = (records, *_module_source(problem, method_cfg, keyed))
+        text, meta = _module_source(problem, method_cfg, keyed)
+        if batched:
+            text += "\n" + batch_source(batched)
+        memo = _sources[key] = (records, text, meta)
     return memo[1], memo[2]
+
+
+def batch_source(driver: str) -> str:
+    """The batched copy of a single-orbit driver (methods/kernels/ensemble.py)."""
+    from gnibench.methods.kernels import ensemble
+    from gnibench.methods.kernels.slots import STATE, Y_ROWS
+    from gnibench.suite.cell.drivers import AdaptiveDriver
+
+    adaptive = driver in AdaptiveDriver.names.values()
+    func = ensemble.batch_adaptive if adaptive else ensemble.batch_fixed
+    text = template(func, {func.__name__: f"batch_{driver}", "DRIVER": driver,
+                           "STATE": str(STATE), "Y_ROWS": str(Y_ROWS),
+                           "UNLIMITED": str(ensemble.UNLIMITED)})
+    # called from Python: compiled with its entry point, as the header's njit does for the
+    # PYTHON_ENTRIES (named here, so that the header of every module stays as it is)
+    return text.replace("@njit(cache=True)",
+                        "@_njit(error_model='numpy', no_cfunc_wrapper=True, cache=True)", 1)
 
 
 def _module_source(problem, method_cfg, keyed: bool) -> tuple[str, dict]:
@@ -325,14 +347,15 @@ def _intact(stored: str) -> bool:
     return head == f"# sha256 {hashlib.sha256(rest.encode()).hexdigest()}"
 
 
-def load(problem, method_cfg):
-    """Import (generating if needed) the cell's compiled module. Returns (module, meta, seconds).
+def load(problem, method_cfg, batched: str = ""):
+    """Import (generating if needed) the cell's compiled module (``batched``: with the batched
+    copy of that driver). Returns (module, meta, seconds).
     A problem with a section has its own module imported first: a cell of its unchanged field
     calls that module's Hénon locator (:func:`problem_module_name`)."""
     t0 = time.perf_counter()
     if problem.record.sections:
         load_problem(problem)
-    text, meta = module_source(problem, method_cfg)
+    text, meta = module_source(problem, method_cfg, batched=batched)
     return _import(text, "cell"), meta, time.perf_counter() - t0
 
 

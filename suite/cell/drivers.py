@@ -168,12 +168,7 @@ class FixedStepDriver(Driver):
         return self.steps / self.nsteps
 
     def reason(self, status: Status) -> str:
-        done = self.steps
-        maxit = self.method.base.values.get("newton_maxit", "-")
-        return {Status.NONFINITE: f"state overflowed or became NaN at step {done + 1}",
-                Status.NEWTON_FAILED: f"Newton (or the projection) did not converge at step "
-                                      f"{done + 1}; raise newton_maxit (now {maxit}) or lower h"
-                }.get(status, "")
+        return fixed_reason(status, self.steps, self.method)
 
     def meta(self) -> dict:
         return {"h": self.h, "nsteps": self.nsteps, "h_last": self.h_last, "every": self.every}
@@ -217,13 +212,7 @@ class AdaptiveDriver(Driver):
         return self.t / self.t_end
 
     def reason(self, status: Status) -> str:
-        t = self.t
-        return {Status.MAX_STEPS: f"more than max_steps={self.max_steps} steps before t = "
-                                  f"{self.t_end:g}",
-                Status.STEP_TOO_SMALL: f"step size underflow at t = {t:.17g} (stiff, or "
-                                       f"diverging)",
-                Status.NEWTON_FAILED: f"the projection did not converge at t = {t:.17g}",
-                }.get(status, "")
+        return adaptive_reason(status, self.t, self.t_end, self.max_steps)
 
     def meta(self) -> dict:
         return {"h": self.h0, "t_end": self.t_end, "every": self.every, "accepted": self.steps,
@@ -234,6 +223,23 @@ class AdaptiveDriver(Driver):
         options = {"h0": 1e-3, "hmax": 1.0, "rtol": 1e-3, "atol": 1e-3, "max_steps": 1}
         return cls(problem, method, name, 1.0, options=options, dt_out=0.5, n_out=2, wanted=1,
                    cell=cell)
+
+
+def fixed_reason(status: Status, done: int, method) -> str:
+    """Why a fixed-step run stopped after ``done`` steps, in words ("" when it did not fail)."""
+    maxit = method.base.values.get("newton_maxit", "-")
+    return {Status.NONFINITE: f"state overflowed or became NaN at step {done + 1}",
+            Status.NEWTON_FAILED: f"Newton (or the projection) did not converge at step "
+                                  f"{done + 1}; raise newton_maxit (now {maxit}) or lower h"
+            }.get(status, "")
+
+
+def adaptive_reason(status: Status, t: float, t_end: float, max_steps: int) -> str:
+    """Why an adaptive run stopped at time ``t``, in words ("" when it did not fail)."""
+    return {Status.MAX_STEPS: f"more than max_steps={max_steps} steps before t = {t_end:g}",
+            Status.STEP_TOO_SMALL: f"step size underflow at t = {t:.17g} (stiff, or diverging)",
+            Status.NEWTON_FAILED: f"the projection did not converge at t = {t:.17g}",
+            }.get(status, "")
 
 
 def kind_of(method) -> type[Driver]:

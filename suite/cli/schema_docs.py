@@ -1,6 +1,7 @@
 """The README tables of the input files' keys, rendered from the schema records.
 
-The tables of ``suite/experiments/README.md`` (experiment, groups, point sets, scales, figure) and
+The tables of ``suite/experiments/README.md`` (experiment, groups, point sets, ensembles, scales,
+figure) and
 of ``README.md`` (claims) sit between ``<!-- schema: NAME -->`` and ``<!-- /schema -->`` markers
 and are generated from the records (:mod:`gnibench.suite.runs.experiment_schema`,
 :mod:`gnibench.suite.runs.figure_schema`, :class:`gnibench.suite.ledger.entries.Claim`);
@@ -28,6 +29,7 @@ TABLES = {
     "points": [("`[cells.points]`", ex.Points, "points."),
                ("`circle = {...}`", ex.Circle, "circle."),
                ("`polygon = {...}`", ex.Polygon, "polygon.")],
+    "ensemble": [("`[cells.ensemble]`", ex.Ensemble, "ensemble.")],
     "scales": [("`[scale.<paper|quick>]`", ex.ScaleTop, ""),
                ("`[cells.scale.<paper|quick>]`", ex.ScaleGroup, "")],
     "figure": [("`[figure]`", fig.Figure, ""), ("`[[figure.panels]]`", fig.Panel, ""),
@@ -39,7 +41,8 @@ TABLES = {
                ("`[[figure.table.rows]]`", fig.Row, "")],
     "claim": [("`[[claim]]`", Claim, ""), ("`values.<name> = {...}`", Value, "")],
 }
-FILES = {"suite/experiments/README.md": ("experiment", "group", "points", "scales", "figure"),
+FILES = {"suite/experiments/README.md": ("experiment", "group", "points", "ensemble", "scales",
+                                         "figure"),
          "README.md": ("claim",)}
 _BLOCK = re.compile(r"(<!-- schema: (\w+) -->\n)(.*?)(<!-- /schema -->)", re.DOTALL)
 

@@ -29,7 +29,6 @@ from typing import TYPE_CHECKING
 from gnibench.suite.cell.spec import structure, with_options
 from gnibench.suite.foundation.budgets import check_count
 from gnibench.suite.foundation.errors import UserError, unknown
-from gnibench.suite.foundation.params import format_float
 from gnibench.suite.foundation.tomlfile import load_toml, read_text_file
 from gnibench.suite.runs.cell import Cell
 
@@ -100,7 +99,8 @@ def parse_experiment(text: str, source: str, scale: str = "paper",
         cells.extend(_expand(group, gi, top, f"{source}: cells[{gi}]", len(cells)))
     seen: dict[tuple, int] = {}
     for c in cells:
-        key = (c.problem, c.method, c.steps, c.t_end, c.every, c.dt_out, c.reference, c.section)
+        key = (c.problem, c.method, c.steps, c.t_end, c.every, c.dt_out, c.reference, c.section,
+               None if c.ensemble is None else c.ensemble.digest())
         if key in seen:
             raise UserError(f"{source}: cell {c.id} ({c.problem} {c.method}) duplicates cell "
                             f"{seen[key]}; allowed: each cell once")
@@ -127,9 +127,7 @@ def _horizon(group: Group, top: ExperimentFile, where: str
 
 def _planned_cells(group: Group) -> int:
     """The number of cells a group expands to, counted before expanding it."""
-    from gnibench.suite.runs.scales import planned_points
-
-    n = planned_points(group.points) * len(group.problems) * len(group.methods)
+    n = len(group.problems) * len(group.methods)        # a point set or ensemble: one cell
     for options in group.vary.values():
         for values in options.values():
             n *= len(values)
@@ -185,12 +183,18 @@ def _expand(group: Group, gi: int, defaults: ExperimentFile, where: str, first_i
                  else group.reference_solution)
     problem_vary, method_vary = _vary(group)
     metric_choices = parse_metrics(list(metrics))
-    points = [{}]
+    ensemble = None
     if group.points is not None:
-        from gnibench.suite.runs.scales import point_options
+        from gnibench.suite.runs.ensemble_spec import from_points
 
-        points = [{k: format_float(v) for k, v in p.items()}
-                  for p in point_options(group.points, where)]
+        ensemble = from_points(group.points, f"{where}: points")
+    elif group.ensemble is not None:
+        ensemble = group.ensemble.model_dump(exclude_none=True)
+    if ensemble is not None:
+        sampled = {t[1] for t in problem_vary} & set(ensemble["options"])
+        if sampled:
+            raise UserError(f"{where}: vary.problem.{sorted(sampled)[0]} and the ensemble both "
+                            f"set it; allowed: one of them")
     try:
         modifiers = {mod.id for m in methods for mod in structure(m).modifiers}
     except UserError as e:
@@ -201,22 +205,26 @@ def _expand(group: Group, gi: int, defaults: ExperimentFile, where: str, first_i
                             f"modifier {target!r}")
     cells = []
     parsed_problems = []
-    for pgiven, point, *pvals in itertools.product(problems, points,
-                                                   *[v[2] for v in problem_vary]):
+    sets: dict[str, object] = {}        # problem spec -> its ensemble (drawn once)
+    for pgiven, *pvals in itertools.product(problems, *[v[2] for v in problem_vary]):
         for mgiven, *mvals in itertools.product(methods, *[v[2] for v in method_vary]):
             here = f"{where}: {pgiven} {mgiven}"
             try:
-                pspec = with_options(pgiven, "problem", point) if point else pgiven
-                pspec = _apply(pspec, problem_vary, pvals)
+                pspec = _apply(pgiven, problem_vary, pvals)
                 mspec = _apply(mgiven, method_vary, mvals)
                 here = f"{where}: {pspec} {mspec}"
                 spec = make_cell(pspec, mspec, steps=steps, t_end=t_end, every=every,
                                  dt_out=dt_out, section=section, reference=reference,
                                  metrics=metric_choices)
+                if ensemble is not None and pspec not in sets:
+                    from gnibench.suite.runs.ensemble_spec import make
+
+                    sets[pspec] = make(ensemble, spec.problem, f"{where}: "
+                                       + ("points" if group.points is not None else "ensemble"))
             except UserError as e:
                 raise UserError(f"{here}: {e}") from None
             parsed_problems.append(spec.problem)
-            cells.append(Cell(first_id + len(cells), gi, label, spec))
+            cells.append(Cell(first_id + len(cells), gi, label, spec, sets.get(pspec)))
     _check_metrics(metric_choices, parsed_problems, where)
     return cells
 

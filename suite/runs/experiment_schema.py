@@ -172,6 +172,64 @@ class Points(PointsPatch):
         return self
 
 
+MAX_ORBITS = 1_000_000
+Orbits = Annotated[int, Allowed(f"an integer from 1 to {MAX_ORBITS}"),
+                   Field(ge=1, le=MAX_ORBITS)]
+Seed = Annotated[int, Allowed("an integer from 0 to 2^63 - 1"), Field(ge=0, le=2 ** 63 - 1)]
+Bounds = Annotated[list[Number], Allowed("a list of numbers, one per option"),
+                   Field(min_length=1, max_length=16)]
+Levels = Annotated[dict[str, Number], Allowed("a table of integral = value, e.g. { H = 0.125 }"),
+                   Field(min_length=1, max_length=16)]
+Keep = Annotated[Literal["all"] | Annotated[int, Field(ge=0, le=MAX_ORBITS)]
+                 | Annotated[list[Annotated[int, Field(ge=0)]], Field(max_length=MAX_POINTS)],
+                 Allowed('"all", a number of orbits (the first ones), or a list of orbit '
+                         'indices')]
+
+
+class EnsemblePatch(Record):
+    """A scale's change of an ensemble (its keys replace the group's)."""
+
+    n: Orbits | None = key(None, "the number of initial conditions (box, shell, circle, "
+                                 "polygon)")
+    seed: Seed | None = key(None, "box, shell: the seed of numpy's Generator(PCG64(seed)) (default 0)")
+    keep: Keep | None = key(None, "the orbits whose samples go to samples.parquet")
+    chunk: Orbits | None = key(None, "orbits per unit of work (default 250)")
+
+
+class Ensemble(EnsemblePatch):
+    """``[cells.ensemble]``: one cell of N initial conditions, run by one batched kernel
+    (:mod:`gnibench.suite.runs.ensembles`)."""
+
+    options: Annotated[list[Line], Field(min_length=1, max_length=16),
+                       AfterValidator(_distinct)] = key(
+        doc="initial-value options of the problem, one per sampled coordinate",
+        allowed="a list of distinct options <state>0, e.g. [\"q0\", \"p0\"]")
+    sample: Literal["box", "shell", "list", "circle", "polygon"] = key(
+        doc="how the initial conditions are made (suite/runs/sampling.py)",
+        allowed="box | shell | list | circle | polygon")
+    low: Bounds | None = key(None, "box, shell: the box's lower corner")
+    high: Bounds | None = key(None, "box, shell: the box's upper corner")
+    level: Levels | None = key(None, "shell: the level set, integral = value")
+    points: PointList | None = key(None, "list: the initial conditions themselves")
+    center: Pair | None = key(None, "circle: its center")
+    radius: Positive | None = key(None, "circle: its radius")
+    vertices: PointList | None = key(None, "polygon: its vertices (at least 3)")
+
+    @model_validator(mode="after")
+    def _keys_of_the_sample(self):
+        needs = {"box": ("n", "low", "high"), "shell": ("n", "low", "high", "level"),
+                 "list": ("points",), "circle": ("n", "center", "radius"),
+                 "polygon": ("n", "vertices")}[self.sample]
+        missing = [k for k in needs if getattr(self, k) is None]
+        if missing:
+            raise ValueError(f"sample = \"{self.sample}\" needs {', '.join(missing)}")
+        shapes = ("low", "high", "level", "points", "center", "radius", "vertices")
+        extra = [k for k in shapes if k not in needs and getattr(self, k) is not None]
+        if extra:
+            raise ValueError(f"{', '.join(extra)} do not apply to sample = \"{self.sample}\"")
+        return self
+
+
 class ScaleTop(Horizon):
     """``[scale.<name>]``: the top-level horizon, sampling or section at that scale."""
 
@@ -182,6 +240,7 @@ class ScaleGroup(Horizon):
 
     vary: Vary | None = key(None, "replaces these vary keys of the group")
     points: PointsPatch | None = key(None, "replaces these keys of the group's point set")
+    ensemble: EnsemblePatch | None = key(None, "replaces these keys of the group's ensemble")
 
 
 class TopScales(Record):
@@ -219,8 +278,17 @@ class Group(Common):
     methods: Specs = key(doc="METHOD spec strings")
     vary: Vary = key({}, "vary.h = [...] (a base-method option), vary.problem.p0 = [...], "
                          "vary.observer.theta = [...] (a modifier's): one cell per value")
-    points: Points | None = key(None, "a set of initial points, one cell each ([cells.points])")
+    points: Points | None = key(None, "a set of initial points: one ensemble cell, every "
+                                      "orbit's samples kept ([cells.points])")
+    ensemble: Ensemble | None = key(None, "N initial conditions in one cell ([cells.ensemble])")
     scale: GroupScales | None = key(None, "[cells.scale.quick]: this group at another scale")
+
+    @model_validator(mode="after")
+    def _one_set(self):
+        if self.points is not None and self.ensemble is not None:
+            raise ValueError("points and ensemble both given; allowed: one of them (points is "
+                             "an ensemble whose orbits' samples are all kept)")
+        return self
 
 
 class ExperimentFile(Common):

@@ -80,6 +80,11 @@ class RunProgress:
 def _describe(o) -> str:
     c, timing = o.cell, o.timing
     line = f"cell {c.id}: {c.problem} {c.method}: {o.status}"
+    ens = getattr(c, "ensemble", None)
+    if ens is not None and o.status != "error":         # a unit of an ensemble: its orbits
+        orbits = f"orbits {ens.first}-{ens.first + ens.n - 1} of {ens.total}"
+        return (f"{line}, {orbits}, compile/load {timing['compile_seconds']:.2f} s, run "
+                f"{timing['wall_seconds'] * 1e3:.3g} ms" + (f" ({o.reason})" if o.reason else ""))
     if o.status != "error":
         steps = o.row["steps"]                  # None: a Python solver that reports none
         steps = "steps not reported" if steps is None else f"{steps} steps"

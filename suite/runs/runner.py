@@ -41,6 +41,7 @@ from __future__ import annotations
 import contextlib
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -120,11 +121,14 @@ def run_experiments(experiments: list[Experiment], outs: list[Path], store_root:
     with own if own is not None else contextlib.nullcontext(), Store(store_root) as store:
         for out in outs:
             Store.make_output_dir(out)
-        keys = [{c.id: cell_key(c) for c in e.cells} for e in experiments]
+        units = {id(c): work_units(c) for e in experiments for c in e.cells}
+        keys = [{c.id: [cell_key(u) for u in units[id(c)]] for c in e.cells}
+                for e in experiments]
         unique: dict[str, object] = {}
         for e, k in zip(experiments, keys):
             for c in e.cells:
-                unique.setdefault(k[c.id], c)
+                for u, key in zip(units[id(c)], k[c.id]):
+                    unique.setdefault(key, u)
         stored = {} if fresh else {k: store.read(k) for k in unique}
         done = {k for k, part in stored.items() if _reusable(part)}
         retried = sum(1 for part in stored.values() if part is not None and not _reusable(part))
@@ -134,7 +138,10 @@ def run_experiments(experiments: list[Experiment], outs: list[Path], store_root:
             pool.fit(executors.workers(jobs, len(todo)))
         where = outs[0] if len(outs) == 1 else store_root
         again = f", {retried} of them ended in error before" if retried else ""
-        print(f"gnibench: {name}: {len(unique)} cells -> {where} ({len(done)} reused from the "
+        ncells = len({k[c.id][0] for e, k in zip(experiments, keys) for c in e.cells})
+        what = f"{ncells} cells" if ncells == len(unique) else \
+            f"{ncells} cells in {len(unique)} units"
+        print(f"gnibench: {name}: {what} -> {where} ({len(done)} reused from the "
               f"store, {len(todo)} to compute{again})", file=log, flush=True)
         progress = RunProgress(len(unique), len(done), log, name)
         # --fresh again would ignore what this run stores
@@ -176,6 +183,15 @@ def run_experiments(experiments: list[Experiment], outs: list[Path], store_root:
     return outs
 
 
+def work_units(cell) -> list:
+    """The units of work of a cell: itself, or an ensemble's chunks of orbits (one unit for an
+    ensemble whose metric needs the whole set: the area of a carried curve)."""
+    if cell.ensemble is None:
+        return [cell]
+    whole = any(c.metric.scope == "ensemble" for c in cell.spec.metrics)
+    return [replace(cell, ensemble=u) for u in cell.ensemble.units(whole)]
+
+
 def _reusable(part: Part | None) -> bool:
     """A stored cell is reused unless it ended in ``error``: an unexpected failure (a worker out
     of memory, a broken environment such as NUMBA_DISABLE_JIT=1) is not a result of its inputs,
@@ -208,8 +224,9 @@ class Consolidator:
     def __init__(self, experiment: Experiment, store: Store, out: Path, summarize=None,
                  keys: dict | None = None, costs: dict | None = None):
         self.experiment, self.store, self.out, self.summarize = experiment, store, out, summarize
-        self.keys = keys if keys is not None else {c.id: cell_key(c) for c in experiment.cells}
-        self.key_set = set(self.keys.values())
+        self.keys = keys if keys is not None else {c.id: [cell_key(u) for u in work_units(c)]
+                                                   for c in experiment.cells}
+        self.key_set = {k for ks in self.keys.values() for k in ks}
         self.dirty = False          # a cell of this experiment finished since the last write
         self.state_names = experiment_states(experiment)
         self.ensembles = any(c.ensemble is not None for c in experiment.cells)
@@ -237,14 +254,21 @@ class Consolidator:
         t0 = time.perf_counter()
         out = self.out
         cells = self.experiment.cells
-        parts = {c.id: restamp(self.store.read(self.keys[c.id]), c) for c in cells
-                 if self.keys[c.id] in done}
+        parts = {c.id: self.part(c) for c in cells if all(k in done for k in self.keys[c.id])}
         parts = {k: p for k, p in parts.items() if p is not None}
         by_id = {c.id: c for c in cells}
         samples = samples_table([(by_id[i], p.samples, p.state_names) for i, p in parts.items()
                                  if p.samples is not None], self.state_names, self.ensembles)
         rows = [parts[c.id].row if c.id in parts else cell_row(c) for c in cells]
         timings = [parts[c.id].timing if c.id in parts else timing_row(c) for c in cells]
+        if self.ensembles:
+            from gnibench.suite.runs.ensemble_tables import ensemble_tables
+
+            for row, c in zip(rows, cells):
+                row.setdefault("orbits", None if c.ensemble is None else c.ensemble.total)
+                row.setdefault("failed_orbits", None)
+            orbits, stats = ensemble_tables([(by_id[i], p) for i, p in parts.items()],
+                                            self.state_names)
         meta = provenance(self.experiment, len(parts))
         # metrics across cells (families equal but for h): a function of the two tables only
         cells_df = family_columns(cells_table(rows), samples)
@@ -257,6 +281,10 @@ class Consolidator:
             self.fields_due = False
         write_parquet(samples, out / "samples.parquet", {**meta, "table": "samples"})
         write_parquet(cells_df, out / "cells.parquet", {**meta, "table": "cells"})
+        if self.ensembles:
+            write_parquet(orbits, out / "ensemble.parquet", {**meta, "table": "ensemble"})
+            write_parquet(stats, out / "ensemble_stats.parquet",
+                          {**meta, "table": "ensemble_stats"})
         write_parquet(timings_df, out / "timings.parquet",
                       {**meta, "table": "timings",
                        "written_at": time.strftime("%Y-%m-%dT%H:%M:%S%z")})
@@ -266,6 +294,19 @@ class Consolidator:
         self.last_write = time.perf_counter()
         self.costs[id(self)] = self.last_write - t0
         self.dirty = False
+
+
+    def part(self, cell) -> Part | None:
+        """The cell's stored part as a cell of this experiment (an ensemble's: its units'
+        parts joined, :func:`gnibench.suite.runs.ensemble_tables.merge`)."""
+        got = [self.store.read(k) for k in self.keys[cell.id]]
+        if any(p is None for p in got):
+            return None
+        if cell.ensemble is None:
+            return restamp(got[0], cell)
+        from gnibench.suite.runs.ensemble_tables import merge
+
+        return merge(cell, got)
 
 
 def restamp(part: Part | None, cell) -> Part | None:

@@ -53,7 +53,7 @@ SUFFIX = ".seg"
 
 #: what the numbers of a cell depend on (folders and files of the package, relative to its root)
 CODE = ("problems", "methods", "suite/foundation", "suite/cell", "suite/metrics",
-        "suite/runs/tables.py")
+        "suite/runs/tables.py", "suite/runs/ensembles.py")
 
 
 def package_root() -> Path:
@@ -92,6 +92,8 @@ def cell_key(cell) -> str:
         doc["reference"] = cell.reference
     if getattr(cell, "section", None) is not None:       # crossings instead of samples
         doc["section"] = cell.section
+    if getattr(cell, "ensemble", None) is not None:      # the orbits of an ensemble's unit
+        doc["ensemble"] = cell.ensemble.digest()
     spec = getattr(cell, "spec", None)
     defs = [] if spec is None else [r.definition for r in (spec.problem.record,
                                                             spec.method.base.record) if r.definition]
