@@ -10,8 +10,9 @@ Floors, from the ground up (README, "Layout"; ``suite/__init__.py``)::
     5 gnibench.suite.runs         experiments, runner, tables, storage, bench
     6 gnibench.suite.ledger       the claims ledger: entries, closed forms, identity checks, verdicts
     7 gnibench.reports            reports from tables
-    8 gnibench.suite.cli          the command line
-    9 gnibench.suite.api          the Python API (the package top re-exports it)
+    8 gnibench.suite.api          the library's entry points, the Python API (the package top
+                                  re-exports it)
+    9 gnibench.suite.cli          the command line: parses arguments, calls the library, prints
 
 A module may import from its own floor or below. Every import counts, also those made inside a
 function (they are for start-up time only, never to dodge a circle).
@@ -35,8 +36,8 @@ FLOORS = (
     ("gnibench.suite.runs", 5),
     ("gnibench.suite.ledger", 6),
     ("gnibench.reports", 7),
-    ("gnibench.suite.cli", 8),
-    ("gnibench.suite.api", 9),
+    ("gnibench.suite.api", 8),
+    ("gnibench.suite.cli", 9),
 )
 # package markers with no code of their own (docstrings, the version)
 NEUTRAL = {"gnibench", "gnibench.suite"}
@@ -94,6 +95,27 @@ def test_imports_go_downwards_only():
           for src, dsts in graph.items() for dst in dsts
           if src not in NEUTRAL and dst not in NEUTRAL and floor(dst) > floor(src)]
     assert not up, "imports that go up a floor:\n" + "\n".join(sorted(up))
+
+
+def test_the_library_does_not_import_the_command_line():
+    """The library first, the command line on top: nothing below ``suite/cli`` imports it (the
+    floors say so; this names the rule of issue 44 on its own, also for the package top)."""
+    graph = import_graph()
+    found = sorted(f"{src} imports {dst}" for src, dsts in graph.items() for dst in dsts
+                   if dst.startswith("gnibench.suite.cli") and not src.startswith("gnibench.suite.cli"))
+    assert not found, "\n".join(found)
+
+
+def test_no_module_class_assignment():
+    """No module is given another class (``module.__class__ = ...``): the package's names are
+    plain functions and subpackages."""
+    found = []
+    for name, path in module_files().items():
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Assign) and any(isinstance(t, ast.Attribute) and t.attr == "__class__"
+                                                    for t in node.targets):
+                found.append(f"{name}:{node.lineno}")
+    assert not found, found
 
 
 def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
