@@ -107,7 +107,7 @@ def list_problems():
     >>> import gnibench
     >>> problems = gnibench.list_problems().set_index("id")
     >>> problems.loc["kepler-2d", ["state", "integrals"]].tolist()
-    [['q1', 'q2', 'p1', 'p2'], ['H', 'L', 'A1', 'A2']]
+    [['p1', 'p2', 'q1', 'q2'], ['H', 'L', 'A1', 'A2']]
     """
     return _frame("problems")
 
@@ -133,8 +133,9 @@ def list_methods():
     --------
     >>> import gnibench
     >>> methods = gnibench.list_methods().set_index("id")
-    >>> methods.loc["rk4", ["kind", "order", "symplectic"]].tolist()
-    ['compiled', 4, False]
+    >>> rk4 = methods.loc["rk4"]
+    >>> rk4["kind"], int(rk4["order"]), bool(rk4["symplectic"])
+    ('compiled', 4, False)
     >>> methods.loc["observer", "kind"]
     'modifier'
     """

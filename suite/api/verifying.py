@@ -135,9 +135,9 @@ def verify(ids: str | list[str] = "all", *, scale: str = "quick", output: Path |
     An identity claim is checked without running any cell:
 
     >>> import gnibench
-    >>> ledger = gnibench.verify("HLW-1-b")
-    >>> ledger[["id", "verdict"]].to_string(index=False)
-    '     id    verdict\\nHLW-1-b reproduced'
+    >>> ledger = gnibench.verify("HLW-1.2-a")
+    >>> ledger.loc[0, "id"], ledger.loc[0, "verdict"]
+    ('HLW-1.2-a', 'reproduced')
     """
     import pandas as pd
 
