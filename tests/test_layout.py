@@ -106,6 +106,15 @@ def test_the_library_does_not_import_the_command_line():
     assert not found, "\n".join(found)
 
 
+def test_reports_read_tables_not_spec_texts():
+    """The reports read the columns the runner writes from the typed cell (problem_id,
+    base_method, modifiers, family, ...): they import no spec parser."""
+    graph = import_graph()
+    found = sorted(f"{src} imports {dst}" for src, dsts in graph.items() for dst in dsts
+                   if src.startswith("gnibench.reports") and dst == "gnibench.suite.cell.spec")
+    assert not found, "\n".join(found)
+
+
 def test_no_module_class_assignment():
     """No module is given another class (``module.__class__ = ...``): the package's names are
     plain functions and subpackages."""

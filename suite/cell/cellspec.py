@@ -159,6 +159,23 @@ class CellSpec:
 
         return effective_dt_out(self.method, self.dt_out)
 
+    @cached_property
+    def grid_plan(self):
+        """How a compiled cell is sampled on its time grid
+        (:class:`~gnibench.suite.cell.timegrid.GridPlan`: driver, locator, grid points), None
+        without one; a transformed problem's grid is in its time component."""
+        spacing = self.grid_spacing
+        if spacing is None or self.method_kind != "compiled" or self.section is not None:
+            return None
+        from gnibench.suite.cell.timegrid import plan
+
+        target, tcomp = self.problem, -1
+        if self.transformed is not None:
+            target = self.transformed
+            tcomp = target.record.state.index(self.problem.record.transform.time)
+        return plan(target, self.method, spacing, self.t_end if self.adaptive else self.t_final,
+                    tcomp)
+
     @property
     def rows(self) -> int:
         """Samples of a cell sampled every K steps: t = 0, every K-th step and the last one."""
@@ -237,6 +254,8 @@ def _check_kind(cell: CellSpec) -> None:
         if tr.time is None:
             raise UserError(f"bad --dt-out for {problem.id} with {tr.option}=true: the "
                             f"transformed system has no time component; allowed: --every K")
+    if compiled and cell.section is None:
+        cell.grid_plan                                      # noqa: B018 (planned now, once)
     if cell.reverse:
         if not compiled or cell.adaptive or cell.transformed is not None:
             raise UserError(f"reverse=True applies to fixed-step compiled methods; "

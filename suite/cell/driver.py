@@ -30,7 +30,6 @@ from gnibench.suite.cell.compiled import problem_kernel
 from gnibench.suite.cell.drivers import AdaptiveDriver, FixedStepDriver, build_trajectory, kind_of
 from gnibench.suite.cell.grid import SampleGrid
 from gnibench.suite.cell.sections import integrate_section
-from gnibench.suite.cell.timegrid import plan
 from gnibench.suite.cell.trajectory import ReferenceSamples, Trajectory
 from gnibench.suite.foundation.params import Bound
 from gnibench.suite.foundation.provenance import versions
@@ -123,8 +122,7 @@ def _transformed(cell: CellSpec, progress, budget) -> Trajectory:
     grid is in the original time, the transformed system's state component ``Transform.time``."""
     problem, transformed = cell.problem, cell.transformed
     tr = problem.record.transform
-    tcomp = -1 if cell.grid_spacing is None else transformed.record.state.index(tr.time)
-    inner = _compiled(transformed, cell, progress, budget, tcomp)
+    inner = _compiled(transformed, cell, progress, budget)
     t, y = tr.back(inner.y, problem.values)
     pk = problem_kernel(problem)
     y0 = tuple(problem.record.y0(problem.values))
@@ -135,16 +133,15 @@ def _transformed(cell: CellSpec, progress, budget) -> Trajectory:
     return build_trajectory(problem, cell.method, t, y, counters, inner.status, inner.reason, prov)
 
 
-def _compiled(problem: Bound, cell: CellSpec, progress, budget, tcomp: int = -1) -> Trajectory:
+def _compiled(problem: Bound, cell: CellSpec, progress, budget) -> Trajectory:
     """A compiled cell on ``problem`` (the cell's, or its transformed system): the fixed-step
-    driver or the adaptive one, sampled every K steps or on a time grid (``tcomp`` >= 0: the
-    grid's time is that state component, :mod:`.timegrid`)."""
+    driver or the adaptive one, sampled every K steps or on the cell's time grid
+    (:attr:`~gnibench.suite.cell.cellspec.CellSpec.grid_plan`; in a state component of a
+    transformed system, :mod:`.timegrid`)."""
     method, every = cell.method, cell.every
     h, nsteps, h_last = cell.h, cell.nsteps, cell.h_last
     adaptive = kind_of(method) is AdaptiveDriver
-    dt_out = cell.grid_spacing
-    t_final = cell.t_end if adaptive else cell.t_final
-    gp = None if dt_out is None else plan(problem, method, dt_out, t_final, tcomp)
+    gp = cell.grid_plan
     kind = AdaptiveDriver if adaptive else FixedStepDriver
     name = kind.names["samples"] if gp is None else gp.driver
     grid_kw = {} if gp is None else {"dt_out": gp.dt_out, "n_out": gp.n_out, "tcomp": gp.tcomp}

@@ -189,3 +189,64 @@ def test_cells_table_says_how_each_method_runs(tmp_path):
     assert list(cells["family"]) == ["rk4+observer:mode=simple,on=H/L,theta=2/2", "heyoka-taylor"]
     assert list(cells["sweep"]) == ["h", "tol"] and list(cells["adaptive"]) == [False, True]
     assert cells["sweep_value"].tolist() == [0.01, 1e-12]
+
+
+CELL_KINDS = [  # problem, method, options, kind
+    ("kepler-2d", "rk4:h=0.05", {"steps": 40, "every": 8}, "fixed step"),
+    ("kepler-2d", "rk4:h=0.05", {"t_end": 2.0, "dt_out": 0.5}, "fixed step"),
+    ("kepler-2d", "dopri5:rtol=1e-8,atol=1e-8", {"t_end": 2.0}, "adaptive"),
+    ("kepler-2d", "scipy-rk45:rtol=1e-8,atol=1e-8", {"t_end": 2.0, "dt_out": 0.5}, "engine"),
+    ("kepler-3d:ks=true", "rk4:h=0.01", {"steps": 50}, "transformed"),
+    ("henon-heiles", "dop853:rtol=1e-10,atol=1e-10", {"t_end": 100.0, "section": 3}, "section"),
+    ("henon-heiles", "scipy-dop853:rtol=1e-10,atol=1e-10,dt_out=0.05", {"t_end": 30.0,
+                                                                        "section": 2}, "section"),
+]
+
+
+@pytest.mark.parametrize("problem, method, options, kind", CELL_KINDS)
+def test_integrate_takes_the_typed_cell_as_it_is(monkeypatch, problem, method, options, kind):
+    """A cell is validated once, by build(): integrate(cell) dispatches on its kind and checks
+    nothing again (the horizon, the budgets, every, dt_out: each check made to fail after
+    build() and the integration still runs, with the same samples)."""
+    import sys
+
+    from gnibench.suite.cell import cellspec, grid, timegrid
+    from gnibench.suite.cell.cellspec import build
+    from gnibench.suite.foundation import budgets
+
+    cell = build(problem, method, **options)
+    assert cell.kind == kind
+    expected = integrate(cell)
+
+    def refused(*a, **k):
+        raise AssertionError("checked again after build()")
+
+    checks = [grid.grid, budgets.check_count, budgets.check_output, budgets.check_integer,
+              cellspec.check_budgets, cellspec.build, timegrid.check_dt_out,
+              timegrid.effective_dt_out, timegrid.engine_method]
+    for name, module in list(sys.modules.items()):     # wherever they were imported by name
+        if name.startswith("gnibench."):
+            for attr, value in list(vars(module).items()):
+                if any(value is f for f in checks):
+                    monkeypatch.setattr(module, attr, refused)
+    again = integrate(cell)
+    assert again.status == "ok" and np.array_equal(again.y, expected.y) and len(again.t) > 1
+
+
+@pytest.mark.parametrize("problem, method, options, message", [
+    ("kepler-2d", "dopri5", {"steps": 10}, "needs --t-end T"),
+    ("kepler-3d:ks=true", "scipy-rk45", {"t_end": 1.0}, "cannot integrate the transformed"),
+    ("kepler-2d", "rk4", {"steps": 10, "locator": "dense"}, "applies to section crossings only"),
+    ("henon-heiles", "rk4:h=0.01", {"t_end": 7.0, "section": 1, "locator": "dense"},
+     "dense output does not locate"),
+    ("henon-heiles", "rk4:h=0.01", {"t_end": 7.0, "section": 1, "locator": "newton"},
+     "bad locator 'newton'"),
+    ("kepler-2d", "dopri5", {"t_end": 1.0, "reverse": True}, "reverse=True applies"),
+])
+def test_what_does_not_apply_is_refused_when_the_cell_is_made(problem, method, options, message):
+    """Refusals that the driver facade used to make in the middle of a run are made by build(),
+    before any work."""
+    from gnibench.suite.cell.cellspec import build
+
+    with pytest.raises(UserError, match=message):
+        build(problem, method, **options)
