@@ -201,10 +201,28 @@ def test_only_gnibench_is_importable(tmp_path):
     assert proc.returncode == 0, proc.stderr + proc.stdout
 
 
-def test_the_test_modules_run_first_exist():
-    """tests/conftest.py names the costliest test modules (run first): each is a test module."""
-    from conftest import COSTLIEST_FIRST
+def test_the_measured_durations_name_test_modules():
+    """tests/durations.json (written by ``pytest --store-durations``; the modules are handed to
+    the workers longest first, tests/conftest.py) holds a duration >= 0 for test modules that
+    exist, and for most of them: a module renamed or removed, or a stale file, fails here."""
+    from conftest import read_durations
 
-    assert len(set(COSTLIEST_FIRST)) == len(COSTLIEST_FIRST)
-    for name in COSTLIEST_FIRST:
-        assert len(list((ROOT / "tests").rglob(name))) == 1, name
+    durations = read_durations()
+    modules = {p.relative_to(ROOT / "tests").as_posix() for p in (ROOT / "tests").rglob("test_*.py")}
+    assert durations, "tests/durations.json is missing: run pytest --store-durations"
+    stale = sorted(set(durations) - modules)
+    assert not stale, f"tests/durations.json names modules that do not exist: {stale}"
+    assert all(v >= 0 for v in durations.values())
+    missing = sorted(modules - set(durations))
+    assert len(missing) <= len(modules) // 10, f"not measured yet (pytest --store-durations): {missing}"
+
+
+def test_modules_are_handed_out_longest_first():
+    """The order of the modules: measured durations, longest first; an unmeasured module at the
+    median; ties in collection order."""
+    from conftest import longest_first
+
+    durations = {"a.py": 5.0, "b.py": 50.0, "c.py": 1.0, "d.py": 20.0}
+    assert longest_first(["a.py", "b.py", "c.py", "d.py", "new.py", "e.py"], durations) == [
+        "b.py", "d.py", "new.py", "e.py", "a.py", "c.py"]           # median 12.5
+    assert longest_first(["x.py", "y.py"], {}) == ["x.py", "y.py"]
