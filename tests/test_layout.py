@@ -25,6 +25,8 @@ import sys
 import tomllib
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGE_DIRS = ("suite", "problems", "methods", "reports")
 FLOORS = (
@@ -178,12 +180,56 @@ def test_cycle_detector_finds_a_planted_cycle():
     assert cycles({"a": {"b"}, "b": set()}) == []
 
 
-def test_pyproject_lists_every_package():
+def _setup_packages() -> list[str]:
+    """The package list setup.py derives (its ``packages()``, without running setup)."""
+    import runpy
+
+    return runpy.run_path(str(ROOT / "setup.py"), run_name="setup")["packages"](str(ROOT))
+
+
+def test_the_package_list_is_derived_from_the_folders():
+    """setup.py derives the packages (setuptools' discovery under the package folders, mapped
+    into gnibench); pyproject.toml lists none by hand; every folder with an __init__.py is one."""
     doc = tomllib.loads((ROOT / "pyproject.toml").read_text())
-    listed = set(doc["tool"]["setuptools"]["packages"])
+    assert "packages" not in doc["tool"]["setuptools"]
+    listed = set(_setup_packages())
     packages = {m for m, p in module_files().items() if p.name == "__init__.py"}
-    assert listed == packages, (f"missing from pyproject: {sorted(packages - listed)}; "
-                                f"listed without an __init__.py: {sorted(listed - packages)}")
+    assert listed == packages, (f"not found by setup.py: {sorted(packages - listed)}; "
+                                f"found without an __init__.py: {sorted(listed - packages)}")
+
+
+def test_a_wheel_holds_every_package_and_its_data(tmp_path):
+    """A non-editable build (pip wheel, offline, as CI's ``pip install .`` builds it) holds every
+    package, every file of pyproject.toml's package-data, and neither setup.py nor the tests."""
+    import fnmatch
+    import shutil
+    import zipfile
+
+    pytest.importorskip("wheel")
+    src = tmp_path / "src"
+    shutil.copytree(ROOT, src, ignore=shutil.ignore_patterns(
+        ".git", "__pycache__", "*.egg-info", "build", "dist", "results", ".benchmarks", "docs",
+        "tests", "benchmarks", "examples"))
+    proc = subprocess.run([sys.executable, "-m", "pip", "wheel", str(src), "--no-deps",
+                           "--no-build-isolation", "--no-index", "-q", "-w", str(tmp_path / "w")],
+                          capture_output=True, text=True, check=False)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    (whl,) = (tmp_path / "w").glob("gnibench-*.whl")
+    names = set(zipfile.ZipFile(whl).namelist())
+    for package in _setup_packages():
+        assert f"{package.replace('.', '/')}/__init__.py" in names, package
+    data = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["package-data"]
+    for package, patterns in data.items():
+        folder = ROOT.joinpath(*package.split(".")[1:])
+        for pattern in patterns:
+            files = [p for p in folder.glob(pattern) if p.is_file()]
+            assert files, (package, pattern)
+            for f in files:
+                assert f"gnibench/{f.relative_to(ROOT).as_posix()}" in names, f
+    assert "gnibench/setup.py" not in names
+    assert not [n for n in names if n.startswith(("tests/", "gnibench/tests/", "benchmarks/"))]
+    modules = {f"gnibench/{p.relative_to(ROOT).as_posix()}" for p in module_files().values()}
+    assert modules <= names, sorted(modules - names)[:5]
 
 
 def test_only_gnibench_is_importable(tmp_path):
