@@ -55,3 +55,17 @@ def test_the_examples_run(name, tmp_path, monkeypatch):
             unload(path)
     result = runner.summarize(verbose=False)
     assert result.failed == 0, f"{result.failed} of {result.attempted} examples failed ({name})"
+
+
+def test_the_how_to_page_runs(tmp_path, monkeypatch, capsys):
+    """docs/how-to/python-api.md: its Python blocks run as they are, and print what it says."""
+    from pathlib import Path
+
+    monkeypatch.chdir(tmp_path)
+    page = Path(__file__).resolve().parents[2] / "docs" / "how-to" / "python-api.md"
+    blocks = re.findall(r"```python\n(.*?)```", page.read_text(encoding="utf-8"), flags=re.DOTALL)
+    assert len(blocks) == 2
+    for block in blocks:
+        exec(compile(block, str(page), "exec"), {})                    # noqa: S102
+    out = capsys.readouterr().out
+    assert "gnibench.run: bad jobs '2' (a str); allowed: an integer, or None" in out
