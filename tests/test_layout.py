@@ -201,7 +201,6 @@ def test_the_package_list_is_derived_from_the_folders():
 def test_a_wheel_holds_every_package_and_its_data(tmp_path):
     """A non-editable build (pip wheel, offline, as CI's ``pip install .`` builds it) holds every
     package, every file of pyproject.toml's package-data, and neither setup.py nor the tests."""
-    import fnmatch
     import shutil
     import zipfile
 

@@ -13,9 +13,9 @@ from __future__ import annotations
 import json
 import math
 import sys
-from pathlib import Path
 
 from gnibench.suite.foundation.errors import UserError
+
 
 def verify_command(a) -> int:
     """``gnibench verify``: the arguments to :func:`gnibench.suite.api.verifying.check_claims`,

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 from gnibench.methods.kernels import slots
 from gnibench.suite.cell.calls import Buffers
-from gnibench.suite.cell.solve import solve
 from gnibench.suite.cell.drivers import AdaptiveDriver, FixedStepDriver
+from gnibench.suite.cell.solve import solve
 from gnibench.suite.cell.spec import prepare
 from gnibench.suite.foundation.errors import UserError
 

@@ -10,8 +10,7 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
-from support_figures import (SECTION_FIGURES, check_figure, check_verdicts, claims_of, paper_only,
-                             reused_cells)
+from support_figures import SECTION_FIGURES, check_figure, check_verdicts, claims_of, paper_only, reused_cells
 
 FIGURES = SECTION_FIGURES[Path(__file__).stem]
 CLAIMS = claims_of(Path(__file__).stem)

@@ -13,8 +13,7 @@ import pytest
 from gnibench.suite.cli.main import main
 from gnibench.suite.ledger.closed_forms_b41 import apsides
 from gnibench.suite.ledger.entries import load_ledger
-from support_figures import (SECTION_FIGURES, check_figure, check_verdicts, claims_of, paper_only,
-                             reused_cells)
+from support_figures import SECTION_FIGURES, check_figure, check_verdicts, claims_of, paper_only, reused_cells
 
 FIGURES = SECTION_FIGURES[Path(__file__).stem]
 CLAIMS = claims_of(Path(__file__).stem)       # B-2-f, an aggregate over §5 and §6, runs its parts

@@ -15,8 +15,7 @@ from gnibench.suite.cli.main import main
 from gnibench.suite.ledger import closed_forms_hlw
 from gnibench.suite.ledger.entries import load_ledger
 from gnibench.suite.runs.experiment import shipped
-from support_figures import (SECTION_FIGURES, check_figure, check_verdicts, claims_of, paper_only,
-                             reused_cells)
+from support_figures import SECTION_FIGURES, check_figure, check_verdicts, claims_of, paper_only, reused_cells
 
 FIGURES = SECTION_FIGURES[Path(__file__).stem]
 CLAIMS = claims_of(Path(__file__).stem)
