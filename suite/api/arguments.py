@@ -60,6 +60,9 @@ def _path(value):
     raise ValueError("not a path")
 
 
+#: what an API annotation that names one of gnibench's records allows, in words
+_CLASS_WORDS = {"Bound": "a parsed problem (gnibench.suite.cell.spec.parse_problem)",
+                "MethodConfig": "a parsed method (gnibench.suite.cell.spec.parse_method)"}
 _NAMES = {int: "an integer", float: "a number", bool: "True or False", str: "a string",
           Path: "a path (str or os.PathLike)", dict: "a dict", type(None): "None"}
 
@@ -93,7 +96,7 @@ def _arg(tp) -> tuple[object, str]:
     if isinstance(tp, type):
         from pydantic import InstanceOf
 
-        return InstanceOf[tp], getattr(tp, "api_name", f"a {tp.__name__}")
+        return InstanceOf[tp], _CLASS_WORDS.get(tp.__name__, f"a {tp.__name__}")
     raise TypeError(f"no API argument type for {tp!r}")
 
 
