@@ -48,47 +48,38 @@ def call_budget(done: int, seconds: float, orbits: int) -> int:
 
 
 def batched(spec) -> bool:
-    """Whether the batched driver runs this typed cell's orbits (a compiled method, no section,
-    no transformed problem)."""
-    problem = spec.problem
-    return (spec.method.kind == "compiled" and spec.section is None
-            and problem.record.transformed(problem.values) is None)
+    """Whether the batched driver runs this typed cell's orbits: a compiled method on the problem
+    itself (fixed step forward, or adaptive), not a section."""
+    from gnibench.suite.cell.cellspec import CellKind
+
+    return spec.kind in (CellKind.FIXED, CellKind.ADAPTIVE) and not spec.reverse
 
 
 def plan(spec) -> tuple[str, dict, int, int]:
-    """The single-orbit driver of the cell, its arguments, the rows of one orbit and the grid's
-    time component."""
-    from gnibench.suite.cell.drivers import AdaptiveDriver, kind_of
-    from gnibench.suite.cell.grid import SampleGrid, grid, grid_step
-    from gnibench.suite.cell.timegrid import effective_dt_out
-    from gnibench.suite.cell.timegrid import plan as grid_plan
+    """The single-orbit driver of the cell, its arguments (as the driver objects of
+    :mod:`gnibench.suite.cell.drivers` pass them), the rows of one orbit and the grid's time
+    component."""
+    from gnibench.suite.cell.drivers import AdaptiveDriver, FixedStepDriver
 
-    method = spec.method
-    kind = kind_of(method)
-    h = grid_step(method)
-    nsteps, h_last = grid(h, spec.steps, spec.t_end)
-    dt_out = effective_dt_out(method, spec.dt_out)
-    t_final = float(spec.t_end) if kind is AdaptiveDriver else (nsteps - 1) * h + h_last
-    gp = None if dt_out is None else grid_plan(spec.problem, method, dt_out, t_final, -1)
+    gp = spec.grid_plan
     every = spec.every
-    if kind is AdaptiveDriver:
-        v = method.base.values
+    grid = {"dt_out": 0.0 if gp is None else gp.dt_out, "n_out": 0 if gp is None else gp.n_out}
+    if spec.adaptive:
+        v = spec.method.base.values
         if gp is None:                        # t = 0 and the end only
             every = int(v["max_steps"]) + 1
         args = {"t_end": float(spec.t_end), "h0": float(v["h0"]),
                 "hmax": float(v["hmax"]) if v["hmax"] > 0 else float(spec.t_end),
-                "rtol": float(v["rtol"]), "atol": float(v["atol"]), "every": every,
-                "dt_out": 0.0 if gp is None else gp.dt_out, "n_out": 0 if gp is None else gp.n_out,
+                "rtol": float(v["rtol"]), "atol": float(v["atol"]), "every": every, **grid,
                 "max_steps": int(v["max_steps"])}
         rows = 3 if gp is None else -(-gp.n_out // every) + 3   # t = 0, the end, a failure
-        name = kind.names["samples"] if gp is None else gp.driver
+        names = AdaptiveDriver.names
     else:
-        args = {"h": h, "nsteps": nsteps, "h_last": h_last, "every": every,
-                "dt_out": 0.0 if gp is None else gp.dt_out, "n_out": 0 if gp is None else gp.n_out}
-        rows = SampleGrid(h, nsteps, h_last, every).rows + 1 if gp is None else \
-            -(-gp.n_out // every) + 3
-        name = kind.names["samples"] if gp is None else gp.driver
-    return name, args, rows, -1
+        args = {"h": float(spec.h), "nsteps": int(spec.nsteps), "h_last": float(spec.h_last),
+                "every": every, **grid}
+        rows = spec.rows + 1 if gp is None else -(-gp.n_out // every) + 3
+        names = FixedStepDriver.names
+    return names["samples"] if gp is None else gp.driver, args, rows, -1
 
 
 def orbit_parameters(problem, method, pk, y0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -76,11 +76,11 @@ def run_cell(cell, report: Callable[[int, float], None] | None = None) -> CellOu
 
 
 def _single(cell, progress) -> CellOutcome:
-    from gnibench.suite.cell.solve import solve_cell
+    from gnibench.suite.cell.driver import integrate
     from gnibench.suite.metrics.compute import apply
     from gnibench.suite.runs.tables import cell_row, cell_sample_columns, timing_row
 
-    traj = solve_cell(cell.spec, progress=progress)
+    traj = integrate(cell.spec, progress=progress)
     metrics, skipped = apply(traj, cell.spec.metrics, problem=cell.spec.problem, families=False)
     samples = cell_sample_columns(traj, metrics)
     row = cell_row(cell, traj, metrics, skipped=skipped)

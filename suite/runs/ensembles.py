@@ -31,6 +31,8 @@ ensemble_reference`: heyoka's ensemble propagation).
 """
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 from gnibench.suite.cell.batch import OrbitSamples
 from gnibench.suite.foundation.status import Status
@@ -87,8 +89,8 @@ def _one_by_one(cell, progress) -> OrbitSamples:
     spec, out = cell.spec, OrbitSamples(trajectories=[])
     problems = orbit_problems(cell)
     for i, problem in enumerate(problems):
-        traj = integrate(problem, spec.method, steps=spec.steps, t_end=spec.t_end,
-                         every=spec.every, dt_out=spec.dt_out, section=spec.section)
+        orbit = replace(spec, problem=problem, reference=None)   # its reference: _measure's
+        traj = integrate(orbit)
         out.trajectories.append(traj)
         out.t.append(traj.t)
         out.y.append(traj.y)
