@@ -6,6 +6,7 @@ computed across the cells of an experiment that differ only in h.
 """
 from gnibench.suite.foundation.registries import register
 from gnibench.suite.metrics import (
+    area,
     global_error,
     growth,
     invariants,
@@ -24,6 +25,7 @@ METRICS = {m.id: m for m in (
     growth.growth,
     order.order,
     section_stats.section_stats,
+    area.area,
 )}
 
 

@@ -7,9 +7,11 @@ columns (they join the samples table, one value per row of the trajectory) and p
 only. Metrics are chosen with the spec syntax: ``--metrics eta,growth:of=H`` on the command line,
 ``metrics = ["eta", "growth:of=H"]`` in an experiment file.
 
-Two scopes: a ``cell`` metric is a function of one trajectory; a ``family`` metric (the observed
+Three scopes: a ``cell`` metric is a function of one trajectory; a ``family`` metric (the observed
 order, :mod:`gnibench.suite.metrics.order`) is a function of the cells and samples tables of the
-cells of an experiment that differ only in the step size h (:mod:`gnibench.suite.metrics.families`).
+cells of an experiment that differ only in the step size h (:mod:`gnibench.suite.metrics.families`);
+an ``ensemble`` metric (the area of a carried set, :mod:`gnibench.suite.metrics.area`) is a
+function of the orbits of an ensemble cell (``compute(carried, values)``).
 """
 from __future__ import annotations
 
@@ -30,7 +32,7 @@ NEEDS = {
     "samples": "the cell's samples are a trajectory (not section crossings)",
 }
 
-SCOPES = ("cell", "family")
+SCOPES = ("cell", "family", "ensemble")
 
 
 @dataclass
@@ -107,6 +109,8 @@ class Metric(Registered):
         if self.scope == "family":
             return (f"{self.id} is computed across the cells of an experiment that differ only "
                     "in h (gnibench run), not from one cell")
+        if self.scope == "ensemble":
+            return f"{self.id} is " + self.check(traj, problem, values)
         for need in self.needs:
             if need == "integrals" and not traj.integral_names:
                 return f"{problem.id} has no first integrals"

@@ -51,16 +51,16 @@ def apply(traj, choices=(), problem=None, families: bool = True) -> tuple[Metric
     ``problem`` is the parsed problem (the typed cell's); without it, it is parsed back from the
     trajectory's canonical spec (a trajectory made outside a typed cell). Returns the merged outputs and, for each chosen metric that does not apply,
     why (default metrics that do not apply are skipped silently, e.g. global error without a
-    reference). A family metric never applies to one trajectory: with ``families`` it is reported
-    as such (``gnibench solve``), without it is left silently to the runner, which computes it
-    across cells.
+    reference). A family metric (or an ensemble metric) never applies to one trajectory: with
+    ``families`` it is reported as such (``gnibench solve``), without it is left silently to the
+    runner, which computes it across cells (over an ensemble cell's orbits).
     """
     if problem is None:
         problem = parse_problem(traj.problem)
     out, skipped = MetricOutput(), {}
     explicit = {c.metric.id for c in choices}
     for choice in selected(choices):
-        if choice.metric.scope == "family" and not families:
+        if choice.metric.scope in ("family", "ensemble") and not families:
             continue
         why = choice.metric.why_not(traj, problem, choice.values)
         if why:

@@ -109,6 +109,8 @@ def merge(cell, parts: list[Part]) -> Part:
         samples=None if samples is None else len(samples["orbit"]),
         integrals=parts[0].row.get("integrals", ""), reference=parts[0].row.get("reference", ""),
         orbits=len(status), failed_orbits=failed)
+    if len(parts) == 1:              # a metric of the whole set (the area): the unit's values
+        row.update({k: v for k, v in parts[0].row.items() if k not in row or k == "metric_notes"})
     for name, s in stats.items():
         if name == "steps":
             row["steps"] = None if not math.isfinite(s["median"]) else int(round(s["median"]))

@@ -70,10 +70,22 @@ def run_ensemble(cell, progress=None):
         runs = integrate_batch(spec, y0, progress=progress)
     else:
         runs = _one_by_one(cell, progress)
-    orbits, samples, names = _measure(cell, y0, runs)
+    orbits, samples, names, refs = _measure(cell, y0, runs)
     failed = sum(1 for s in runs.status if s is not Status.OK)
     row = cell_row(cell, None, None, str(Status.OK),
                    f"{failed} of {cell.ensemble.n} orbits failed" if failed else "")
+    notes = {}
+    for choice in spec.metrics:
+        if choice.metric.scope == "ensemble":
+            why = "" if cell.ensemble.curve is not None else \
+                "needs initial points on a closed curve (sample = circle or polygon)"
+            if why:
+                notes[choice.text()] = why
+            else:
+                row.update(choice.metric.compute(_carried(cell, y0, runs, refs, choice.values),
+                                                 choice.values))
+    if notes:
+        row["metric_notes"] = "; ".join(f"{k}: {v}" for k, v in notes.items())
     timing = {"cell": cell.id, "problem": cell.problem, "method": cell.method,
               "status": str(Status.OK), "wall_seconds": runs.wall,
               "compile_seconds": runs.compile,
@@ -138,7 +150,50 @@ def _measure(cell, y0: np.ndarray, runs: OrbitSamples):
             scalars = _default_metrics(pk, y, H0[i], ref)
         rows.append(_orbit_row(rec, ens.first + i, y0[i], t, y, c, runs.status[i],
                                runs.reason[i], scalars))
-    return _columns(rows), _concatenate(samples), rec.state
+    return _columns(rows), _concatenate(samples), rec.state, refs
+
+
+def _carried(cell, y0: np.ndarray, runs: OrbitSamples, refs, values: dict):
+    """The ensemble's closed curve carried by the flow (:class:`gnibench.suite.metrics.area.
+    CarriedSet`): its orbits on their common sample times, and how to carry more points of the
+    curve (the same integration, batched or one by one; their references likewise)."""
+    from gnibench.suite.cell.batch import batched, integrate_batch
+    from gnibench.suite.cell.ensemble_reference import ensemble_references
+    from gnibench.suite.metrics.area import CarriedSet
+    from gnibench.suite.runs import sampling
+    from gnibench.suite.runs.ensemble_spec import EnsembleSpec
+
+    spec, ens = cell.spec, cell.ensemble
+    rec = spec.problem.record
+    times = max(runs.t, key=len)
+    shape, *curve = ens.curve
+    n = ens.n
+
+    def on_times(t_list, y_list) -> np.ndarray:
+        out = np.full((len(t_list), len(times), rec.dim), np.nan)
+        for i, (t, y) in enumerate(zip(t_list, y_list)):
+            k = min(len(t), len(times))
+            same = np.flatnonzero(t[:k] == times[:k])
+            out[i, same] = y[same]
+        return out
+
+    def advance(s: np.ndarray):
+        pts = sampling.circle_at(*curve, s) if shape == "circle" else \
+            sampling.polygon_at(curve[0], s)
+        more = EnsembleSpec(ens.options, ens.sample, np.ascontiguousarray(pts), (), len(s), 0,
+                            len(s), ens.curve)
+        unit = replace(cell, ensemble=more)
+        start = initial_states(unit)
+        got = integrate_batch(spec, start) if batched(spec) else _one_by_one(unit, None)
+        ref = None if spec.reference is None else ensemble_references(
+            spec.problem, start, got.t, spec.reference, ens.options, pts)
+        return on_times(got.t, got.y), None if ref is None else on_times(got.t, ref)
+
+    names = values.get("of") or tuple(o[:-1] for o in ens.options)
+    coords = (rec.state.index(names[0]), rec.state.index(names[1]))
+    exact = None if refs is None else on_times(runs.t, refs)
+    s = np.arange(n) / n
+    return CarriedSet(s, np.asarray(times), on_times(runs.t, runs.y), exact, coords, advance)
 
 
 def _trajectory(cell, problem, runs: OrbitSamples, i: int, ref):

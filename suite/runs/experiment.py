@@ -190,6 +190,15 @@ def _expand(group: Group, gi: int, defaults: ExperimentFile, where: str, first_i
         ensemble = from_points(group.points, f"{where}: points")
     elif group.ensemble is not None:
         ensemble = group.ensemble.model_dump(exclude_none=True)
+    for choice in metric_choices:
+        if choice.metric.scope == "ensemble" and (ensemble is None or ensemble["sample"] not in (
+                "circle", "polygon")):
+            raise UserError(f"{where}: metric {choice.text()} applies to an ensemble of initial "
+                            f"points on a closed curve (ensemble or points: circle or polygon)")
+        if choice.metric.scope == "ensemble" and choice.values.get("of") is None and len(
+                ensemble["options"]) != 2:
+            raise UserError(f"{where}: metric {choice.text()} needs of=x/y (the ensemble samples "
+                            f"{len(ensemble['options'])} options, not 2)")
     if ensemble is not None:
         sampled = {t[1] for t in problem_vary} & set(ensemble["options"])
         if sampled:
