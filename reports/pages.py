@@ -14,7 +14,7 @@ import math
 import re
 from pathlib import Path
 
-from gnibench.reports import league, plots, workprecision
+from gnibench.reports import ensembles, league, plots, workprecision
 
 FIXED = {"cell", "group", "label", "problem", "method", "problem_id", "base_method", "modifiers",
          "method_kind", "h", "t_end",
@@ -189,8 +189,10 @@ def experiment_page(res, img_dir: Path, slug: str, thresholds, jobs) -> dict:
                    "reason": str(r.reason or "")} for r in part.itertuples() if r.status != "ok"]
         groups = [{"group": str(g), "label": str(lab or "")} for g, lab in
                   part[["group", "label"]].drop_duplicates().itertuples(index=False)]
+        ens = ensembles.section(res, part, img_dir, prefix, slug, thresholds, jobs)
         page["problems"].append({
             "name": str(problem), "anchor": prefix, "figures": [f.__dict__ for f in figs],
+            "ensemble": ens,
             "wp": [f.__dict__ for f in wp], "no_nfev": workprecision.no_nfev(part) if wp else [],
             "league": league_tables(part, wall, thresholds),
             "table": cells_table(part, ps, wall, compile_s, by_cell, memo), "failed": failed,

@@ -30,12 +30,15 @@ RC = {"text.hinting": "no_hinting"}
 
 @dataclass
 class Series:
-    """One curve (``ax.plot``) or point set (``ax.scatter``) with its matplotlib keywords."""
+    """One curve (``ax.plot``) or point set (``ax.scatter``) with its matplotlib keywords; with
+    ``band`` (the lower y, and ``y`` the upper), a shaded band between them
+    (``ax.fill_between``: quantiles over an ensemble's orbits)."""
 
     x: np.ndarray
     y: np.ndarray
     style: dict
     scatter: bool = False
+    band: np.ndarray | None = None
 
 
 @dataclass
@@ -56,6 +59,7 @@ class Panel:
     colorbar: dict | None = None
     xticks: list | None = None
     xticklabels: list | None = None          # at ``xticks``, font size 7
+    ylim: tuple | None = None
 
 
 @dataclass
@@ -183,7 +187,9 @@ def _ticks(ax) -> None:
 def _panel(fig, ax, panel: Panel) -> None:
     last = None
     for s in panel.series:
-        if s.scatter:
+        if s.band is not None:
+            ax.fill_between(s.x, s.band, s.y, **s.style)
+        elif s.scatter:
             last = ax.scatter(s.x, s.y, **s.style)
         else:
             ax.plot(s.x, s.y, **s.style)
@@ -191,6 +197,8 @@ def _panel(fig, ax, panel: Panel) -> None:
         fig.colorbar(last, ax=ax, **panel.colorbar)
     ax.set_xscale(panel.xscale)
     ax.set_yscale(panel.yscale)
+    if panel.ylim is not None:
+        ax.set_ylim(*panel.ylim)
     if panel.xticks is not None:
         ax.set_xticks(panel.xticks)
         if panel.xticklabels is not None:
@@ -214,6 +222,14 @@ def render(plot: Plot, path: Path) -> None:
 
 
 def _render(plot: Plot, path: Path) -> None:
+    fig, canvas = figure(plot)
+    canvas.draw()
+    _write_png(canvas, path)
+
+
+def figure(plot: Plot):
+    """The matplotlib Figure of ``plot`` (not drawn yet) and its Agg canvas: what :func:`render`
+    writes, and what the plot helpers of the API return (``gnibench.plot``)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -238,8 +254,7 @@ def _render(plot: Plot, path: Path) -> None:
             fig.legend(handles, labels, **plot.legend)
     for ax in fig.axes:
         _ticks(ax)
-    canvas.draw()
-    _write_png(canvas, path)
+    return fig, canvas
 
 
 def _write_png(canvas, path: Path) -> None:

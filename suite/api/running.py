@@ -32,6 +32,13 @@ class RunResult:
         The tables' provenance: experiment, its TOML text, versions, the cells.
     output : pathlib.Path or None
         The results directory; None when the run went to a temporary directory.
+    ensemble : pandas.DataFrame or None
+        With ensemble cells: one row per orbit (``cell``, ``orbit``, its initial state
+        ``<state>0``, ``status``, ``t_failed``, counters, ``final_<state>``, per-orbit metrics;
+        ``ensemble.parquet``); None without.
+    ensemble_stats : pandas.DataFrame or None
+        With ensemble cells: per cell and measure, ``failed``, ``failure_rate``, ``q10``,
+        ``median``, ``q90``, ``min``, ``max`` over the orbits (``ensemble_stats.parquet``).
 
     Examples
     --------
@@ -50,11 +57,54 @@ class RunResult:
     timings: object
     meta: dict = field(default_factory=dict)
     output: Path | None = None
+    ensemble: object = None
+    ensemble_stats: object = None
 
     def __repr__(self) -> str:
         where = self.output if self.output is not None else "in memory"
+        orbits = "" if self.ensemble is None else f", {len(self.ensemble)} orbits"
         return (f"RunResult({self.meta.get('experiment')!r}: {len(self.cells)} cells, "
-                f"{len(self.samples)} samples, {where})")
+                f"{len(self.samples)} samples{orbits}, {where})")
+
+    def ensemble_league(self, eps: float, share: float = 0.9, measure: str | None = None,
+                        problem: str | None = None):
+        """The league of the ensemble cells: per method family, the cost per orbit (mean
+        nfev, mean wall seconds) at which ``share`` of its orbits reach error <= ``eps``
+        (failed orbits never do), interpolated along the family's sweep, ranked
+        (:func:`gnibench.reports.ensembles.league`).
+
+        Parameters
+        ----------
+        eps : float
+            The accuracy to reach.
+        share : float
+            The share of the orbits that must reach it (0 < share <= 1).
+        measure : str or None
+            The error (a column of :attr:`ensemble`); default ``max_global_error`` where there
+            is a reference, else the first integral's ``max_abs_err_<I>``.
+        problem : str or None
+            The cells of this problem spec only (default: all).
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per family: ``family``, ``rank``, ``nfev``, ``nfev_how``, ``wall_seconds``,
+            ``rank_wall``, ``best_error``, ``cells``.
+        """
+        from gnibench.reports.ensembles import league, league_frame
+
+        if self.ensemble is None:
+            raise UserError("this run has no ensemble cells ([cells.ensemble])")
+        if not (isinstance(share, (int, float)) and 0 < share <= 1) or not (
+                isinstance(eps, (int, float)) and eps > 0):
+            raise UserError(f"bad eps={eps!r}, share={share!r}; allowed: eps > 0, "
+                            f"0 < share <= 1")
+        cells, orbits = self.cells, self.ensemble
+        if problem is not None:
+            cells = cells[cells["problem"] == problem]
+            orbits = orbits[orbits["cell"].isin(cells["cell"])]
+        wall = dict(zip(self.timings["cell"], self.timings["wall_seconds"]))
+        return league_frame(league(cells, orbits, float(eps), float(share), measure, wall))
 
 
 def read_tables(out: Path, output: Path | None) -> RunResult:
@@ -64,6 +114,9 @@ def read_tables(out: Path, output: Path | None) -> RunResult:
 
     tables = {name: pd.read_parquet(out / f"{name}.parquet")
               for name in ("samples", "cells", "timings")}
+    for name, file in (("ensemble", "ensemble"), ("ensemble_stats", "ensemble_stats")):
+        path = out / f"{file}.parquet"
+        tables[name] = pd.read_parquet(path) if path.is_file() else None
     meta = read_parquet_meta(out / "cells.parquet")
     meta.pop("table", None)
     return RunResult(**tables, meta=meta, output=output)

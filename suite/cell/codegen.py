@@ -161,10 +161,10 @@ def batch_source(driver: str) -> str:
     text = template(func, {func.__name__: f"batch_{driver}", "DRIVER": driver,
                            "STATE": str(STATE), "Y_ROWS": str(Y_ROWS),
                            "UNLIMITED": str(ensemble.UNLIMITED)})
-    # called from Python: compiled with its entry point, as the header's njit does for the
-    # PYTHON_ENTRIES (named here, so that the header of every module stays as it is)
-    return text.replace("@njit(cache=True)",
-                        "@_njit(error_model='numpy', no_cfunc_wrapper=True, cache=True)", 1)
+    # called from Python: numba's own njit with the header's error model (the header's njit
+    # would treat a name not in PYTHON_ENTRIES as internal; the header of every module stays
+    # as it is)
+    return text.replace("@njit(cache=True)", "@_njit(error_model='numpy', cache=True)", 1)
 
 
 def _module_source(problem, method_cfg, keyed: bool) -> tuple[str, dict]:

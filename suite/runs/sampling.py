@@ -9,12 +9,13 @@ The sampled coordinates are initial-value options of the problem (``q0``, ``p20`
   row. The same seed gives the same points bit for bit on every machine numpy runs on (PCG64 and
   ``Generator.random`` are numpy's stable stream; the affine map is one multiplication and one
   addition per value).
-* ``shell``: points on a level set of first integrals, ``{I_k(y) = c_k}`` (``level = {H = c}``,
-  one or more integrals). Candidates are drawn from the box as above; each is moved onto the
-  level set by Newton's method along the gradients (the minimum-norm Gauss–Newton step in the
-  sampled coordinates, :func:`project`); a candidate whose iteration does not converge (a zero
-  gradient, a level set the candidate's line never meets) is dropped and the next candidate is
-  taken, in the order drawn, until N are placed. The projection runs in plain Python on the
+* ``shell``: points of a level set of first integrals, ``{I_k(y) = c_k}`` (``level = {H = c}``,
+  one or more integrals), inside the box. Candidates are drawn from the box as above; each is
+  moved onto the level set by Newton's method along the gradients (the minimum-norm
+  Gauss–Newton step in the sampled coordinates, :func:`project`); a candidate whose iteration
+  does not converge (a zero gradient, a level set the candidate's line never meets) or ends
+  outside the box (another component of the level set: an escaping orbit of Hénon–Heiles) is
+  dropped and the next candidate is taken, in the order drawn, until N are placed. The projection runs in plain Python on the
   problem's generated functions (IEEE double, one value at a time), so the points are the same
   bits whatever the number of workers: they are made once, where the experiment is read.
 * ``list``: the points given.
@@ -23,7 +24,8 @@ The sampled coordinates are initial-value options of the problem (``q0``, ``p20`
   ([HLW] Figs 1.1 and 1.3; :mod:`gnibench.suite.metrics.area`).
 
 The distribution on a shell is the box's pushed along the gradients, not the surface measure of
-the level set; it covers the part of the level set that the box's points project to.
+the level set; it covers the part of the level set inside the box that the box's points project
+to.
 """
 from __future__ import annotations
 
@@ -105,7 +107,7 @@ def shell(problem, options: list[str], low, high, levels: dict[str, float], n: i
         drawn += n
         for x in batch:
             p = project(x, y0, at, functions, gradients, targets, par)
-            if p is not None:
+            if p is not None and np.all((low <= p) & (p <= high)):
                 out.append(p)
                 if len(out) == n:
                     break
