@@ -19,22 +19,33 @@ PI = LD("3.14159265358979323846264338327950288")
 
 def solve_kepler(M: np.ndarray, e) -> np.ndarray:
     """Solve E - e sin E = M (vectorized), Newton from Danby's start, to round-off, in the
-    precision of M (long double when M is)."""
+    precision of M (long double when M is: Newton in double first, then in long double from
+    the double root, whose quadratic convergence needs one or two long double iterations
+    instead of the whole sequence, long double sine and cosine being slow)."""
     M = np.asarray(M)
     if M.dtype != LD:
         M = M.astype(float)
     pi = PI if M.dtype == LD else np.pi
-    eps = np.finfo(M.dtype).eps
     e = M.dtype.type(e)
     Mr = np.remainder(M + pi, 2 * pi) - pi                    # reduce to [-pi, pi)
-    E = Mr + M.dtype.type(0.85) * e * np.sign(Mr)             # Danby's starting value
+    if M.dtype == LD:
+        start = _newton(Mr.astype(float), float(e), Mr.astype(float)
+                        + 0.85 * float(e) * np.sign(Mr.astype(float))).astype(LD)
+    else:
+        start = Mr + M.dtype.type(0.85) * e * np.sign(Mr)     # Danby's starting value
+    return _newton(Mr, e, start) + (M - Mr)
+
+
+def _newton(Mr: np.ndarray, e, E: np.ndarray) -> np.ndarray:
+    """Newton's iteration on E - e sin E = Mr from E, to round-off in Mr's precision."""
+    eps = np.finfo(Mr.dtype).eps
     for _ in range(60):
         f = E - e * np.sin(E) - Mr
         dE = f / (1 - e * np.cos(E))
         E = E - dE
         if np.all(np.abs(dE) <= 2 * eps * (1 + np.abs(E))):
             break
-    return E + (M - Mr)
+    return E
 
 
 def kepler_period(q0, p0, mu: float = 1.0) -> float:
@@ -76,9 +87,10 @@ def kepler_orbit_2d(q0, p0, t, mu=1.0):
     M = (E0 - e * np.sin(E0)) + n * t
     E = solve_kepler(M, e)
     b = a * np.sqrt(1 - e * e)
-    x, y = a * (np.cos(E) - e), b * np.sin(E)
-    denom = 1 - e * np.cos(E)
-    vx, vy = -a * n * np.sin(E) / denom, b * n * np.cos(E) / denom
+    cos, sin = np.cos(E), np.sin(E)               # once each: long double trig is slow
+    x, y = a * (cos - e), b * sin
+    denom = 1 - e * cos
+    vx, vy = -a * n * sin / denom, b * n * cos / denom
     ex, ey = evec_dir
     # perifocal -> inertial: x along the eccentricity vector, y rotated by +90 deg times sign(L)
     qx, qy = ex * x - s * ey * y, ey * x + s * ex * y

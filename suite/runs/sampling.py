@@ -60,12 +60,22 @@ def project(x: np.ndarray, y0: list[float], at: list[int], functions: list, grad
     for _ in range(NEWTON_ITERATIONS):
         for i, v in zip(at, x):
             y[i] = v
-        r = [f(tuple(y), par) - c for f, c in zip(functions, levels)]
-        if all(math.isfinite(v) and abs(v) <= TOLERANCE * max(1.0, abs(c))
-               for v, c in zip(r, levels)):
+        state = tuple(y)
+        r = [f(state, par) - c for f, c in zip(functions, levels)]
+        if not all(math.isfinite(v) for v in r):
+            return None
+        if all(abs(v) <= TOLERANCE * max(1.0, abs(c)) for v, c in zip(r, levels)):
             return np.array(x)
-        J = np.array([[g(tuple(y), par)[i] for i in at] for g in gradients], dtype=float)
-        if not np.all(np.isfinite(J)) or not all(math.isfinite(v) for v in r):
+        J = [[g(state, par)[i] for i in at] for g in gradients]
+        if len(J) == 1:                        # one integral: x -= g r / |g|^2, in floats
+            g = J[0]
+            norm = math.fsum(v * v for v in g)
+            if not (math.isfinite(norm) and norm > 0):
+                return None
+            x = [a - v * r[0] / norm for a, v in zip(x, g)]
+            continue
+        J = np.array(J, dtype=float)
+        if not np.all(np.isfinite(J)):
             return None
         try:
             step = J.T @ np.linalg.solve(J @ J.T, np.array(r))

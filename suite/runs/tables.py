@@ -36,7 +36,7 @@ def frame_of(columns: dict[str, np.ndarray]) -> pd.DataFrame:
     """The DataFrame of a cell's columns (:func:`sample_columns`)."""
     import pandas as pd
 
-    return missing_steps(pd.DataFrame(columns))
+    return missing_steps(pd.DataFrame(columns, copy=False))   # the arrays are the cell's own
 
 
 def missing_steps(df: pd.DataFrame) -> pd.DataFrame:

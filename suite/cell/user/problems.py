@@ -230,18 +230,24 @@ def _numbers(exprs, params, states=(), pid: str = "?"):
     return initial
 
 
-def _y0(values, states, init, params):
-    base = _numbers(init, params, states)(values)
-    return [values.get(f"{s}0") if values.get(f"{s}0") is not None else b
-            for s, b in zip(states, base)]
-
-
 def _period(expr, params, states, init, pid: str = "?"):
+    """``period(values)``: the period at these option values, kept per values (sympy's
+    ``evalf`` runs once for a cell, as for the initial point)."""
     from gnibench.suite.foundation.errors import UserError
 
+    initial = _numbers(init, params, states)
+    known: dict[tuple, float] = {}
+
+    def y0(values):
+        return [values.get(f"{s}0") if values.get(f"{s}0") is not None else b
+                for s, b in zip(states, initial(values))]
+
     def period(values):
-        subs = {**{n: values[n] for n in params},
-                **{f"{s}0": v for s, v in zip(states, _y0(values, states, init, params))}}
+        point = y0(values)
+        key = (*(values[n] for n in params), *point)
+        if key in known:
+            return known[key]
+        subs = {**{n: values[n] for n in params}, **{f"{s}0": v for s, v in zip(states, point)}}
         try:
             value = complex(expr.subs({s: subs[s.name] for s in expr.free_symbols}).evalf(20))
         except (TypeError, ValueError, ZeroDivisionError, OverflowError):
@@ -250,6 +256,9 @@ def _period(expr, params, states, init, pid: str = "?"):
             shown = f"{value.real:g}" if value.imag == 0 else f"{value:g} (not real)"
             raise UserError(f"problem {pid}: its period {expr} is {shown} for these "
                             f"options; allowed: options where it is a finite number > 0")
+        if len(known) >= 256:
+            known.clear()
+        known[key] = value.real
         return value.real
     return period
 
