@@ -1,0 +1,34 @@
+"""The benchmark scripts of the runner and of ensembles run (at their quick size), so that none
+can rot: each ends with exit code 0 and prints its table; no timing is checked here."""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _run(script: str, tmp_path: Path) -> dict | list:
+    out = tmp_path / "out.json"
+    done = subprocess.run([sys.executable, str(ROOT / "benchmarks" / script), "--quick",
+                           "--json", str(out)], capture_output=True, text=True, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr[-2000:]
+    return json.loads(out.read_text())
+
+
+def test_ensemble_benchmark_runs_and_its_orbits_are_the_separate_cells(tmp_path):
+    rows = _run("bench_ensembles.py", tmp_path)
+    assert [r["method"].split(":")[0] for r in rows] == ["dop853", "vern9"]
+    for r in rows:
+        assert r["same_bits"] and r["orbits"] == 40
+        assert r["heyoka_tol"] is not None                  # heyoka reached the same accuracy
+        assert r["median_error_ensemble"] == r["median_error_cells"]
+
+
+def test_runner_cost_benchmark_runs(tmp_path):
+    out = _run("bench_runner_cost.py", tmp_path)
+    assert out["cells"] == 40
+    for key in ("parent_ms_per_cell", "speedup_j2", "reuse_ms_per_cell", "report_s"):
+        assert out[key] > 0
