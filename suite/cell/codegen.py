@@ -145,26 +145,11 @@ def module_source(problem, method_cfg, keyed: bool = False, batched: str = "") -
     if memo is None or any(a is not b for a, b in zip(memo[0], records)):
         text, meta = _module_source(problem, method_cfg, keyed)
         if batched:
+            from gnibench.suite.cell.batch import batch_source
+
             text += "\n" + batch_source(batched)
         memo = _sources[key] = (records, text, meta)
     return memo[1], memo[2]
-
-
-def batch_source(driver: str) -> str:
-    """The batched copy of a single-orbit driver (methods/kernels/ensemble.py)."""
-    from gnibench.methods.kernels import ensemble
-    from gnibench.methods.kernels.slots import STATE, Y_ROWS
-    from gnibench.suite.cell.drivers import AdaptiveDriver
-
-    adaptive = driver in AdaptiveDriver.names.values()
-    func = ensemble.batch_adaptive if adaptive else ensemble.batch_fixed
-    text = template(func, {func.__name__: f"batch_{driver}", "DRIVER": driver,
-                           "STATE": str(STATE), "Y_ROWS": str(Y_ROWS),
-                           "UNLIMITED": str(ensemble.UNLIMITED)})
-    # called from Python: numba's own njit with the header's error model (the header's njit
-    # would treat a name not in PYTHON_ENTRIES as internal; the header of every module stays
-    # as it is)
-    return text.replace("@njit(cache=True)", "@_njit(error_model='numpy', cache=True)", 1)
 
 
 def _module_source(problem, method_cfg, keyed: bool) -> tuple[str, dict]:

@@ -4,11 +4,14 @@ The runner only composes: :func:`gnibench.suite.runs.cellwork.run_cell` solves a
 cell, an executor (:mod:`gnibench.suite.runs.executors`: this process, a local process pool, Dask)
 decides where, the store (:mod:`gnibench.suite.runs.store`) commits every finished cell as its own
 part, and the tables (:mod:`gnibench.suite.runs.tables`) are consolidated from the parts in cell
-order. A summary renderer can be passed in (the command line passes the Markdown report's); the
-runner itself sits below the reports.
+order. An ensemble cell (:mod:`gnibench.suite.runs.ensemble_spec`) is run as units of a fixed
+number of orbits (:func:`work_units`), each a part; its row and statistics are made from its units'
+orbits (:mod:`gnibench.suite.runs.ensemble_tables`). A summary renderer can be passed in (the
+command line passes the Markdown report's); the runner itself sits below the reports.
 
 Outputs in ``out_dir`` (default ``results/<experiment name>``): ``parts/`` (the store),
-``samples.parquet``, ``cells.parquet``, ``timings.parquet`` and, with a renderer, ``summary.md``
+``samples.parquet``, ``cells.parquet``, ``timings.parquet``, with ensemble cells
+``ensemble.parquet`` and ``ensemble_stats.parquet``, and, with a renderer, ``summary.md``
 (columns: ``suite/experiments/README.md``). Each Parquet file carries the provenance (experiment
 name and full TOML text, package versions, canonical specs of every cell) in its schema metadata
 under the key ``gnibench``; ``samples`` and ``cells`` carry nothing that depends on the run (no
@@ -44,7 +47,6 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
-import numpy as np
 from gnibench.suite.foundation.cache import atomic_write
 from gnibench.suite.foundation.outputs import fault
 from gnibench.suite.foundation.provenance import versions

@@ -15,9 +15,10 @@ The sampled coordinates are initial-value options of the problem (``q0``, ``p20`
   Gauss–Newton step in the sampled coordinates, :func:`project`); a candidate whose iteration
   does not converge (a zero gradient, a level set the candidate's line never meets) or ends
   outside the box (another component of the level set: an escaping orbit of Hénon–Heiles) is
-  dropped and the next candidate is taken, in the order drawn, until N are placed. The projection runs in plain Python on the
-  problem's generated functions (IEEE double, one value at a time), so the points are the same
-  bits whatever the number of workers: they are made once, where the experiment is read.
+  dropped and the next candidate is taken, in the order drawn, until N are placed. The
+  projection runs in plain Python on the problem's generated functions (IEEE double, one value
+  at a time), so the points are the same bits whatever the number of workers: they are made
+  once, where the experiment is read.
 * ``list``: the points given.
 * ``circle``, ``polygon``: N points on a closed curve, in order (counterclockwise from angle 0;
   evenly spaced by arc length from the first vertex): a set's boundary, carried by the flow
