@@ -175,3 +175,17 @@ def with_and_without(patch: str, produce: str, after_uninstall: str = "") -> tup
     done = subprocess.run([sys.executable, "-c", code], cwd=root, capture_output=True,
                           check=True, timeout=300)
     return pickle.loads(done.stdout)
+
+
+def stored_cells(out) -> int:
+    """The finished cells a results directory's store holds: the records of its segments
+    (``parts/*.seg``, suite/runs/partfile.py; a record cut short not counted)."""
+    from pathlib import Path
+
+    from gnibench.suite.runs.partfile import scan
+
+    total = 0
+    for seg in (Path(out) / "parts").glob("*.seg"):
+        with open(seg, "rb") as f:
+            total += len(scan(f, seg.name)[0])
+    return total

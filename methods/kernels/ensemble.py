@@ -55,3 +55,19 @@ def batch_adaptive(Y0, PAR, first, count, t_end, h0, hmax, rtol, atol, every, dt
                       max_steps, UNLIMITED, out_t[i], out_y[i], out_c[i])
         status[i] = s
         rows[i] = r
+
+
+def batch_source(driver: str, adaptive: bool) -> str:
+    """The batched copy of the single-orbit driver ``driver`` (``adaptive``: of the adaptive
+    loop's argument list): ``batch_<driver>``, compiled with numba's own njit and the error
+    model of the module's header (the header's njit treats a name it does not list as internal;
+    the header of every module stays as it is)."""
+    from gnibench.methods.kernels.slots import STATE, Y_ROWS
+    from gnibench.suite.foundation.templates import template
+
+    func = batch_adaptive if adaptive else batch_fixed
+    text = template(func, {func.__name__: f"batch_{driver}", "DRIVER": driver,
+                           "STATE": str(STATE), "Y_ROWS": str(Y_ROWS),
+                           "UNLIMITED": str(UNLIMITED)})
+    return text.replace("@njit(cache=True)", "@_njit(error_model='numpy', cache=True)", 1)
+

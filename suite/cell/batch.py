@@ -82,24 +82,6 @@ def plan(spec) -> tuple[str, dict, int, int]:
     return names["samples"] if gp is None else gp.driver, args, rows, -1
 
 
-def batch_source(driver: str) -> str:
-    """The batched copy of a single-orbit driver (methods/kernels/ensemble.py)."""
-    from gnibench.methods.kernels import ensemble
-    from gnibench.methods.kernels.slots import STATE, Y_ROWS
-    from gnibench.suite.cell.drivers import AdaptiveDriver
-    from gnibench.suite.foundation.templates import template
-
-    adaptive = driver in AdaptiveDriver.names.values()
-    func = ensemble.batch_adaptive if adaptive else ensemble.batch_fixed
-    text = template(func, {func.__name__: f"batch_{driver}", "DRIVER": driver,
-                           "STATE": str(STATE), "Y_ROWS": str(Y_ROWS),
-                           "UNLIMITED": str(ensemble.UNLIMITED)})
-    # called from Python: numba's own njit with the header's error model (the header's njit
-    # would treat a name not in PYTHON_ENTRIES as internal; the header of every module stays
-    # as it is)
-    return text.replace("@njit(cache=True)", "@_njit(error_model='numpy', cache=True)", 1)
-
-
 def orbit_parameters(problem, method, pk, y0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The run-time parameters of each orbit (rows, as :func:`gnibench.suite.cell.compiled.
     compile_cell` makes ``par`` for one cell: the problem's model parameters, each modifier's

@@ -145,9 +145,9 @@ def module_source(problem, method_cfg, keyed: bool = False, batched: str = "") -
     if memo is None or any(a is not b for a, b in zip(memo[0], records)):
         text, meta = _module_source(problem, method_cfg, keyed)
         if batched:
-            from gnibench.suite.cell.batch import batch_source
+            from gnibench.methods.kernels.ensemble import batch_source
 
-            text += "\n" + batch_source(batched)
+            text += "\n" + batch_source(batched, bool(method_cfg.base.values.get("adaptive")))
         memo = _sources[key] = (records, text, meta)
     return memo[1], memo[2]
 

@@ -66,7 +66,9 @@ def run_cell(cell, report: Callable[[int, float], None] | None = None) -> CellOu
             if getattr(cell, "ensemble", None) is not None:
                 from gnibench.suite.runs.ensembles import run_ensemble
 
-                return run_ensemble(cell, progress)
+                samples, row, timing, names, orbits = run_ensemble(cell, progress)
+                return CellOutcome(cell, row["status"], row["reason"], samples, row, timing,
+                                   names, orbits)
             return _single(cell, progress)
     except Exception as e:  # noqa: BLE001 - any failure of one cell is recorded, the run goes on
         reason = f"{type(e).__name__}: {e}".replace("\n", " ")

@@ -58,10 +58,11 @@ def initial_states(cell) -> np.ndarray:
     return y0
 
 
-def run_ensemble(cell, progress=None):
-    """The outcome of one ensemble unit (see the module docstring)."""
+def run_ensemble(cell, progress=None) -> tuple:
+    """What one ensemble unit gives (see the module docstring): the kept orbits' samples, the
+    unit's row and timings row, the state names and the orbits' rows, as
+    :class:`~gnibench.suite.runs.cellwork.CellOutcome` takes them."""
     from gnibench.suite.cell.batch import batched, integrate_batch
-    from gnibench.suite.runs.cellwork import CellOutcome
     from gnibench.suite.runs.tables import cell_row
 
     spec = cell.spec
@@ -90,8 +91,7 @@ def run_ensemble(cell, progress=None):
               "status": str(Status.OK), "wall_seconds": runs.wall,
               "compile_seconds": runs.compile,
               "cache_misses": runs.provenance.get("numba_cache_misses")}
-    return CellOutcome(cell, str(Status.OK), row["reason"], samples, row, timing,
-                       tuple(spec.problem.record.state), orbits)
+    return samples, row, timing, tuple(spec.problem.record.state), orbits
 
 
 def _one_by_one(cell, progress) -> OrbitSamples:

@@ -20,6 +20,7 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
+from support import stored_cells
 from gnibench.suite.cli.main import main
 from gnibench.suite.foundation.errors import UserError
 from gnibench.suite.foundation.outputs import check_output_file
@@ -333,11 +334,11 @@ def test_disk_full_during_a_run_keeps_the_stored_cells_and_a_rerun_completes(tmp
     written = []
     real = store.Store.write
 
-    def write(self, key, part, empty):
+    def write(self, key, part):
         if len(written) == 2:
             raise OSError(errno.ENOSPC, "No space left on device")
         written.append(key)
-        real(self, key, part, empty)
+        return real(self, key, part)
 
     monkeypatch.setattr(store.Store, "write", write)
     capsys.readouterr()
@@ -345,7 +346,7 @@ def test_disk_full_during_a_run_keeps_the_stored_cells_and_a_rerun_completes(tmp
     err = [ln for ln in capsys.readouterr().err.splitlines() if not ln.startswith("[")]
     assert code == 1 and err[-1].startswith("gnibench: error:"), err
     assert "No space left on device" in err[-1] and "2 of 4 cells are stored" in err[-1]
-    assert len(list((full / "parts").glob("*.parquet"))) == 2
+    assert stored_cells(full) == 2
     monkeypatch.setattr(store.Store, "write", real)
     assert main(["run", str(exp), "-o", str(full), "-j", "1", "--no-report"]) == 0
     assert "(2 reused from the store, 2 to compute)" in capsys.readouterr().err
@@ -355,34 +356,24 @@ def test_disk_full_during_a_run_keeps_the_stored_cells_and_a_rerun_completes(tmp
 
 def test_a_fresh_run_stopped_early_counts_its_stored_cells_and_says_drop_fresh(tmp_path, capsys,
                                                                              monkeypatch):
-    """A signal between a cell's commit and its read-back: the cell is stored and counted (it was
-    left out of 'k of n cells are stored'); after --fresh the advice is to run again without it
-    (the same command would ignore what was stored)."""
-    from gnibench.suite.runs import store
+    """A signal right after a cell is committed: the cell is stored and counted (in 'k of n
+    cells are stored'); after --fresh the advice is to run again without it (the same command
+    would ignore what was stored)."""
+    from gnibench.suite.runs.progress import RunProgress
 
     exp = tmp_path / "tiny.toml"
     exp.write_text(TINY)
-    real = store.Store.read
-    computed = []
 
-    def read(self, key):
-        if key in computed and len(computed) == 1:   # the read-back of the first cell stored
-            computed.append("interrupted")
-            raise KeyboardInterrupt
-        return real(self, key)
+    def cell_done(self, outcome):
+        raise KeyboardInterrupt
 
-    def write(self, key, part, empty, real_write=store.Store.write):
-        real_write(self, key, part, empty)
-        computed.append(key)
-
-    monkeypatch.setattr(store.Store, "read", read)
-    monkeypatch.setattr(store.Store, "write", write)
+    monkeypatch.setattr(RunProgress, "cell_done", cell_done)
     code = main(["run", str(exp), "-o", str(tmp_path / "out"), "-j", "1", "--no-report",
                  "--fresh"])
     err = capsys.readouterr().err
     assert code == 130 and "1 of 4 cells are stored" in err, err
     assert "run it again without --fresh" in err
-    assert len(list((tmp_path / "out" / "parts").glob("*.parquet"))) == 1
+    assert stored_cells(tmp_path / "out") == 1
 
 
 # ---- report and bench -------------------------------------------------------------------------

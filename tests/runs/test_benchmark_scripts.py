@@ -3,6 +3,7 @@ can rot: each ends with exit code 0 and prints its table; no timing is checked h
 from __future__ import annotations
 
 import json
+import math
 import subprocess
 import sys
 from pathlib import Path
@@ -30,5 +31,6 @@ def test_ensemble_benchmark_runs_and_its_orbits_are_the_separate_cells(tmp_path)
 def test_runner_cost_benchmark_runs(tmp_path):
     out = _run("bench_runner_cost.py", tmp_path)
     assert out["cells"] == 40
-    for key in ("parent_ms_per_cell", "speedup_j2", "reuse_ms_per_cell", "report_s"):
+    for key in ("parent_ms_per_cell", "speedup_j2", "report_s"):
         assert out[key] > 0
+    assert math.isfinite(out["reuse_ms_per_cell"])          # a difference of noisy times

@@ -15,6 +15,7 @@ import time
 from pathlib import Path
 
 import pytest
+from support import stored_cells
 
 GNIBENCH = str(Path(sys.executable).with_name("gnibench"))
 SAFETY = 300.0                     # seconds: only a hang reaches this
@@ -143,11 +144,11 @@ def _frozen_pool_run(tmp_path, out):
                                  "--no-report"], stderr=subprocess.PIPE,
                                 stdout=subprocess.DEVNULL, text=True)
         deadline = time.monotonic() + SAFETY
-        while not any((out / "parts").glob("*.parquet")) and proc.poll() is None:
+        while not stored_cells(out) and proc.poll() is None:
             assert time.monotonic() < deadline, "no stored cell"
             time.sleep(0.02)
         proc.send_signal(signal.SIGSTOP)
-        if proc.poll() is None and len(list((out / "parts").glob("*.parquet"))) < 12:
+        if proc.poll() is None and stored_cells(out) < 12:
             workers = _children(proc.pid)
             assert len(workers) >= 2, workers
             return exp, proc, workers
@@ -165,7 +166,7 @@ def test_sigterm_of_a_pool_run_stops_its_workers_and_keeps_the_stored_cells(tmp_
     code, err = ended(proc)
     assert code == 143 and err[-1] == "gnibench: terminated"
     wait_for(lambda: all(_gone(w) for w in workers), "end of the workers")
-    stored = len(list((out / "parts").glob("*.parquet")))
+    stored = stored_cells(out)
     again = subprocess.run([GNIBENCH, "run", str(exp), "-o", str(out), "-j", "2", "--no-report"],
                            capture_output=True, text=True, timeout=SAFETY, check=False)
     assert again.returncode == 0, again.stderr
@@ -206,10 +207,10 @@ def test_sigint_of_a_dask_run_ends_it_and_its_workers(tmp_path):
         proc = subprocess.Popen([GNIBENCH, "run", str(exp), "-o", str(out), "--executor", "dask",
                                  "-j", "2", "--no-report"], stderr=subprocess.PIPE,
                                 stdout=subprocess.DEVNULL, text=True)
-        wait_for(lambda: any((out / "parts").glob("*.parquet")) or proc.poll() is not None,
+        wait_for(lambda: stored_cells(out) or proc.poll() is not None,
                  "stored cell")
         proc.send_signal(signal.SIGSTOP)
-        if proc.poll() is None and len(list((out / "parts").glob("*.parquet"))) < 12:
+        if proc.poll() is None and stored_cells(out) < 12:
             break
         proc.kill()
         proc.wait()

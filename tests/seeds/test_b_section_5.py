@@ -7,6 +7,7 @@ import json
 from pathlib import Path
 
 import pytest
+from support import stored_cells
 from gnibench.suite.cli.main import main
 from gnibench.suite.ledger.entries import load_ledger
 from support_figures import SECTION_FIGURES, check_figure, check_verdicts, claims_of, reused_cells
@@ -40,8 +41,9 @@ def test_figure_files_labels_and_data(figures, name):
 
 
 def test_figures_share_their_runs(figures):
-    """Identical cells across b-fig-9 ... b-fig-14 are computed once (one store part per cell)."""
-    assert len(list((figures / "parts").glob("*.parquet"))) == DISTINCT_CELLS
+    """Identical cells across b-fig-9 ... b-fig-14 are computed once (one stored record per
+    cell)."""
+    assert stored_cells(figures) == DISTINCT_CELLS
 
 
 def test_captions_and_legends_use_the_seeds_symbols(figures):
