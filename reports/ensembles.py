@@ -193,3 +193,28 @@ def _cost(c: Cost, scale: float = 1.0) -> str:
     if c.how == "interpolated":
         return f"{value} (cells {c.cells[0]}–{c.cells[1]})"
     return f"{value} (cell {c.cells[0]})"
+
+
+def ensemble_work_precision(result, measure: str | None = None, problem: str | None = None):
+    """The statistical work-precision diagram of a run's ensemble cells (a
+    :class:`gnibench.RunResult`, or anything with its ``cells``, ``ensemble`` and
+    ``ensemble_stats`` tables), as a matplotlib Figure (see the module docstring).
+
+    Parameters
+    ----------
+    result : RunResult
+        A run with ensemble cells.
+    measure : str or None
+        The error (a column of ``ensemble.parquet``); default ``max_global_error`` where there is
+        a reference, else the first integral's ``max_abs_err_<I>``.
+    problem : str or None
+        The cells of this problem spec only (default: all).
+    """
+    from gnibench.reports.render import figure
+    from gnibench.suite.foundation.errors import UserError
+
+    if getattr(result, "ensemble", None) is None:
+        raise UserError("this run has no ensemble cells ([cells.ensemble])")
+    measure = measure_of(result.ensemble, measure)
+    fig, _ = figure(work_precision(result.cells, result.ensemble_stats, measure, problem))
+    return fig

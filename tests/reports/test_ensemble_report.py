@@ -71,3 +71,16 @@ def test_the_report_page_shows_the_ensembles(result, tmp_path):
     assert "<h3>Ensembles</h3>" in page and "24 initial conditions" in page
     images = list((index.parent / "img").rglob("*ensemble-work-precision.png"))
     assert len(images) == 1 and images[0].stat().st_size > 10_000
+
+
+def test_the_plot_helper_draws_the_median_band_and_failure_rate(result):
+    from gnibench.reports.ensembles import ensemble_work_precision
+
+    fig = ensemble_work_precision(result)
+    left, right = fig.axes
+    assert left.get_xscale() == right.get_xscale() == "log" and left.get_yscale() == "log"
+    assert [t.get_text() for t in left.get_legend().get_texts()] == ["dopri5", "dop853"]
+    assert len(left.collections) == 2                        # one q10-q90 band per family
+    medians = result.ensemble_stats.query("metric == 'max_global_error'")["median"].to_numpy()
+    drawn = np.concatenate([line.get_ydata() for line in left.get_lines()])
+    assert sorted(drawn) == sorted(medians)
