@@ -66,7 +66,8 @@ def family_columns(cells: pd.DataFrame, samples: pd.DataFrame) -> pd.DataFrame:
         return cells
     groups: dict[tuple, list[int]] = {}
     choices = {}
-    for i, row in cells.iterrows():
+    chose = cells["metrics"].fillna("").astype(str) != ""      # no row of the others is read
+    for i, row in cells[chose].iterrows():
         for text in split_metrics(row["metrics"]):
             choice = parse_metric(text)
             if choice.metric.scope != "family":

@@ -70,8 +70,9 @@ def encode(key: str, part: Part) -> tuple[bytes, Part]:
     the writer's tables are made of too, so a resumed run's tables are the same bytes."""
     import numpy as np
 
-    meta = normal({"key": key, "row": part.row, "timing": part.timing,
-                   "state_names": list(part.state_names)})
+    text = json.dumps({"key": key, "row": part.row, "timing": part.timing,
+                       "state_names": list(part.state_names)}, default=_plain)
+    meta = json.loads(text)                 # as a reader gets it back
     columns, blobs = [], []
     for table, cols in (("samples", part.samples), ("orbits", part.orbits)):
         for name, values in (cols or {}).items():
@@ -84,7 +85,7 @@ def encode(key: str, part: Part) -> tuple[bytes, Part]:
                 data = json.dumps([_plain(v) for v in a.tolist()]).encode()
             columns.append([table, str(name), kind, int(a.shape[0]), len(data)])
             blobs.append(data)
-    header = json.dumps({**meta, "columns": columns}, default=_plain).encode()
+    header = (text[:-1] + ', "columns": ' + json.dumps(columns) + "}").encode()
     payload = b"".join([len(header).to_bytes(8, "little"), header, *blobs])
     back = Part(part.samples, restore(meta["row"]), restore(meta["timing"]),
                 tuple(meta["state_names"]), part.orbits)
