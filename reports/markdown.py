@@ -114,7 +114,9 @@ def render_summary(meta: dict, cells, timings) -> str:
     for problem, records in by_problem.items():
         errs = [c for c in err_columns if any(pd.notna(d[c]) for d in records)]
         has_exact = any(pd.notna(d["final_global_error"]) for d in records)
-        header = ["cell", "method", "status", "t", "steps", "nfev"]
+        orbits = any(pd.notna(d.get("orbits")) for d in records)
+        header = ["cell", "method", "status"] + (["orbits (failed)"] if orbits else [])
+        header += ["t", "steps", "nfev"]
         header += [f"max \\|err {c[len('max_abs_err_'):]}\\|" for c in errs]
         if has_exact:
             header += ["final global error", "max global error"]
@@ -122,8 +124,11 @@ def render_summary(meta: dict, cells, timings) -> str:
         rows = []
         for d in records:
             kind = " (runs in Python)" if d.get("method_kind") == "python" else ""
-            row = [d["cell"], code(d["method"]) + kind, escape(d["status"]), _num(d["t_final"], ".4g"),
-                   _num(d["steps"]), _count(d["nfev"])]
+            row = [d["cell"], code(d["method"]) + kind, escape(d["status"])]
+            if orbits:
+                row.append(f"{_count(d['orbits'])} ({_count(d['failed_orbits'])})"
+                           if pd.notna(d.get("orbits")) else "")
+            row += [_num(d["t_final"], ".4g"), _num(d["steps"]), _count(d["nfev"])]
             row += [_num(d[c]) for c in errs]
             if has_exact:
                 row += [_num(d["final_global_error"]), _num(d["max_global_error"])]
@@ -131,6 +136,10 @@ def render_summary(meta: dict, cells, timings) -> str:
             row += [_num(ms, ".3g"), _num(comp.get(d["cell"]), ".2f")]
             rows.append(row)
         lines += [f"## {code(problem)}", ""] + _table(header, rows) + [""]
+        if orbits:
+            lines += ["An ensemble cell's values are the medians over its orbits (a failed orbit "
+                      "as +inf); every orbit is in `ensemble.parquet`, the statistics in "
+                      "`ensemble_stats.parquet`.", ""]
         notes = [f"- cell {d['cell']} ({escape(d['status'])}): {escape(d['reason'])}"
                  for d in records if d["status"] not in ("ok", "pending") and d["reason"]]
         if notes:
