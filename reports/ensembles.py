@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from gnibench.reports.league import Cost, LeagueRow, _ranks, cost_to_reach
+from gnibench.reports.league import Cost, LeagueRow, cost_to_reach, ranked
 
 SHARE = 0.9
 MEASURES = ("max_global_error", "final_global_error")
@@ -76,12 +76,7 @@ def league(cells, orbits, eps: float, share: float = SHARE, measure: str | None 
         rows.append(LeagueRow(str(fam), cost_to_reach(nfev, err, ids, eps),
                               cost_to_reach(wall, err, ids, eps),
                               float(finite.min()) if len(finite) else math.nan, len(part)))
-    for attr, rank in (("nfev", "rank_nfev"), ("wall", "rank_wall")):
-        for row, r in zip(rows, _ranks([getattr(x, attr).value for x in rows])):
-            setattr(row, rank, r)
-    big = 10 ** 9
-    rows.sort(key=lambda r: (r.rank_nfev or big, r.rank_wall or big, r.family))
-    return rows
+    return ranked(rows)
 
 
 def league_frame(rows: list[LeagueRow]):

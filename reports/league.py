@@ -113,6 +113,11 @@ def league(cells, wall_by_cell: dict[int, float], eps: float,
             costs = (cost_to_reach(nfev, err, ids, eps), cost_to_reach(wall, err, ids, eps))
         rows.append(LeagueRow(str(fam), *costs,
                               float(finite.min()) if len(finite) else math.nan, len(part), failed))
+    return ranked(rows)
+
+
+def ranked(rows: list[LeagueRow]) -> list[LeagueRow]:
+    """League rows with their ranks by nfev and by wall time, in rank order (unranked last)."""
     for attr, rank in (("nfev", "rank_nfev"), ("wall", "rank_wall")):
         for row, r in zip(rows, _ranks([getattr(x, attr).value for x in rows])):
             setattr(row, rank, r)

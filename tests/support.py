@@ -189,3 +189,17 @@ def stored_cells(out) -> int:
         with open(seg, "rb") as f:
             total += len(scan(f, seg.name)[0])
     return total
+
+
+def three_executors(experiment, tmp_path) -> dict:
+    """``gnibench run`` of an experiment file serially, on a 2-process pool and on a 2-worker
+    Dask LocalCluster (a real one): {executor: its output directory}."""
+    from gnibench.suite.cli.main import main
+
+    outs = {}
+    for name, args in {"serial": ["-j", "1"], "pool": ["-j", "2"],
+                       "dask": ["--executor", "dask", "-j", "2"]}.items():
+        outs[name] = tmp_path / name
+        assert main(["run", str(experiment), "-o", str(outs[name]), *args, "--no-report"]) == 0, \
+            name
+    return outs

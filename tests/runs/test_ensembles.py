@@ -19,6 +19,7 @@ from gnibench.suite.cli.main import main
 from gnibench.suite.foundation.params import Bound
 from gnibench.suite.runs.cellwork import run_cell
 from gnibench.suite.runs.experiment import parse_experiment
+from support import three_executors
 
 TABLES = ("samples.parquet", "cells.parquet", "ensemble.parquet", "ensemble_stats.parquet")
 
@@ -136,12 +137,7 @@ def test_each_orbit_is_the_single_cell_of_its_initial_condition():
 def test_user_problem_tables_are_identical_whatever_runs_them(tmp_path, user):
     """-j 1, -j 2 and a 2-worker Dask LocalCluster: the same bytes."""
     pytest.importorskip("distributed")
-    exp = user
-    outs = {}
-    for name, args in {"serial": ["-j", "1"], "pool": ["-j", "2"],
-                       "dask": ["--executor", "dask", "-j", "2"]}.items():
-        outs[name] = tmp_path / name
-        assert main(["run", str(exp), "-o", str(outs[name]), *args, "--no-report"]) == 0, name
+    outs = three_executors(user, tmp_path)
     assert _tables(outs["pool"]) == _tables(outs["serial"])
     assert _tables(outs["dask"]) == _tables(outs["serial"])
     _check_statistics(outs["serial"])

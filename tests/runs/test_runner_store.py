@@ -15,6 +15,7 @@ import pytest
 from gnibench.suite.cli.main import main
 from gnibench.suite.runs import store as store_module
 from gnibench.suite.runs.store import Store
+from support import three_executors
 
 GNIBENCH = [str(Path(sys.executable).with_name("gnibench"))]
 TABLES = ("samples.parquet", "cells.parquet")
@@ -165,8 +166,6 @@ def test_replaced_records_are_compacted(tmp_path, capsys):
     """--fresh runs append new records of the same keys; once most stored bytes are replaced ones,
     the live records are copied into one segment and the old segments removed; nothing changes in
     the tables or in what is reused."""
-    from gnibench.suite.runs.store import Store
-
     exp = _write(tmp_path, TINY, "tiny")
     out = tmp_path / "out"
     for _ in range(3):
@@ -196,12 +195,7 @@ def test_lock_keeps_a_second_run_off(tmp_path, capsys):
 def test_executors_give_byte_identical_tables(tmp_path):
     """Serial, a 2-process pool and a 2-worker Dask LocalCluster (a real one)."""
     pytest.importorskip("distributed")
-    exp = _write(tmp_path, TINY, "tiny")
-    outs = {}
-    for name, args in {"serial": ["-j", "1"], "pool": ["-j", "2"],
-                       "dask": ["--executor", "dask", "-j", "2"]}.items():
-        outs[name] = tmp_path / name
-        assert main(["run", str(exp), "-o", str(outs[name]), *args, "--no-report"]) == 0, name
+    outs = three_executors(_write(tmp_path, TINY, "tiny"), tmp_path)
     assert _tables(outs["pool"]) == _tables(outs["serial"])
     assert _tables(outs["dask"]) == _tables(outs["serial"])
 
