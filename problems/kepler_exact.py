@@ -19,25 +19,17 @@ PI = LD("3.14159265358979323846264338327950288")
 
 def solve_kepler(M: np.ndarray, e) -> np.ndarray:
     """Solve E - e sin E = M (vectorized), Newton from Danby's start, to round-off, in the
-    precision of M (long double when M is: Newton in double first, then in long double from
-    the double root, whose quadratic convergence needs one or two long double iterations
-    instead of the whole sequence, long double sine and cosine being slow)."""
+    precision of M (long double when M is: :func:`kepler_anomaly`)."""
     M = np.asarray(M)
-    if M.dtype != LD:
-        M = M.astype(float)
-    pi = PI if M.dtype == LD else np.pi
-    e = M.dtype.type(e)
-    Mr = np.remainder(M + pi, 2 * pi) - pi                    # reduce to [-pi, pi)
     if M.dtype == LD:
-        start = _newton(Mr.astype(float), float(e), Mr.astype(float)
-                        + 0.85 * float(e) * np.sign(Mr.astype(float))).astype(LD)
-    else:
-        start = Mr + M.dtype.type(0.85) * e * np.sign(Mr)     # Danby's starting value
-    return _newton(Mr, e, start) + (M - Mr)
+        return kepler_anomaly(M, e)[0]
+    M = M.astype(float)
+    Mr = np.remainder(M + np.pi, 2 * np.pi) - np.pi              # reduce to [-pi, pi)
+    return _newton(Mr, float(e), Mr + 0.85 * float(e) * np.sign(Mr)) + (M - Mr)
 
 
 def _newton(Mr: np.ndarray, e, E: np.ndarray) -> np.ndarray:
-    """Newton's iteration on E - e sin E = Mr from E, to round-off in Mr's precision."""
+    """Newton's iteration on E - e sin E = Mr from E (Danby's start), to round-off in double."""
     eps = np.finfo(Mr.dtype).eps
     for _ in range(60):
         f = E - e * np.sin(E) - Mr
@@ -46,6 +38,24 @@ def _newton(Mr: np.ndarray, e, E: np.ndarray) -> np.ndarray:
         if np.all(np.abs(dE) <= 2 * eps * (1 + np.abs(E))):
             break
     return E
+
+
+def kepler_anomaly(M: np.ndarray, e) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """E, sin E and cos E (long double) of E - e sin E = M (long double): Newton in double to
+    round-off, then two Newton steps in long double (the double root is within a few 1e-16,
+    so one step leaves an error of order 1e-31 and the second makes the root's sine and cosine
+    consistent at long double round-off); the second step's correction dE (of order
+    eps_LD) is carried into sin E and cos E to first order (the second-order term, dE^2, is
+    1e-38), so the orbit needs no long double sine or cosine more: long double trig is slow
+    (three evaluations in all, where the whole Newton sequence in long double took six to ten)."""
+    e = LD(e)
+    Mr = np.remainder(M + PI, 2 * PI) - PI                         # reduce to [-pi, pi)
+    d = Mr.astype(float)
+    E = _newton(d, float(e), d + 0.85 * float(e) * np.sign(d)).astype(LD)
+    E = E - (E - e * np.sin(E) - Mr) / (1 - e * np.cos(E.astype(float)).astype(LD))
+    sin, cos = np.sin(E), np.cos(E)
+    dE = (E - e * sin - Mr) / (1 - e * cos)
+    return E - dE + (M - Mr), sin - cos * dE, cos + sin * dE
 
 
 def kepler_period(q0, p0, mu: float = 1.0) -> float:
@@ -85,9 +95,8 @@ def kepler_orbit_2d(q0, p0, t, mu=1.0):
         sinE = (q0 @ p0) / (e * np.sqrt(mu * a))
         E0 = np.arctan2(sinE, cosE)
     M = (E0 - e * np.sin(E0)) + n * t
-    E = solve_kepler(M, e)
+    _, sin, cos = kepler_anomaly(M, e)        # no long double sine or cosine of E again
     b = a * np.sqrt(1 - e * e)
-    cos, sin = np.cos(E), np.sin(E)               # once each: long double trig is slow
     x, y = a * (cos - e), b * sin
     denom = 1 - e * cos
     vx, vy = -a * n * sin / denom, b * n * cos / denom
