@@ -46,7 +46,9 @@ root_doc = "index"
 nitpicky = True
 # Internal modules below the public API are not part of the reference: a docstring's reference to
 # one (``gnibench.suite....``) renders as code instead of a link.
-nitpick_ignore_regex = [(r"py:.*", r"gnibench\.(suite|methods|problems|reports)\..*")]
+nitpick_ignore_regex = [(r"py:.*", r"gnibench\.(suite|methods|problems|reports)\..*"),
+                        # the column tuples of gnibench.list_* (named in their docstrings)
+                        (r"py:data", r"(PROBLEM|METHOD|METRIC)_COLUMNS")]
 suppress_warnings = ["myst.header"]
 
 # --- MyST and MyST-NB -------------------------------------------------------------------------
@@ -77,7 +79,10 @@ numpydoc_xref_aliases = {
 # every public function shows its parameters and an example (issue 39): a missing section is a
 # warning, so an error of the build
 numpydoc_validation_checks = {"PR01", "RT01", "EX01"}
-numpydoc_validation_exclude = {r"\.__init__$", r"\.__repr__$"}
+# the records (RunResult, Trajectory) are returned, never built by users: their fields are
+# documented as Attributes, with the class's example, and their properties as one line
+numpydoc_validation_exclude = {r"\.__init__$", r"\.__repr__$",
+                               r"^gnibench\.(RunResult|Trajectory)(\.\w+)?$"}
 
 # --- intersphinx, from local inventories (docs/_inv: no network at build time) ----------------
 _INV = DOCS / "_inv"

@@ -39,4 +39,6 @@ class OrderedTocTree(TocTree):
                 listed.append(entry)
         self.content = StringList(listed, source=self.content.source(0) if self.content else "")
         toctree["glob"] = False
-        return super().parse_content(toctree)
+        out = super().parse_content(toctree)
+        toctree["glob"] = True          # a new page of the folder makes Sphinx read this one again
+        return out
