@@ -12,6 +12,7 @@ generated when the build starts (``docs/_ext/gnibench_docs``).
 """
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import Path
 
@@ -19,6 +20,12 @@ DOCS = Path(__file__).resolve().parent
 sys.path.insert(0, str(DOCS / "_ext"))
 
 import gnibench  # noqa: E402
+
+# The executed pages run `gnibench` in %%bash cells: the command of this interpreter's
+# environment, and every cell stops at its first failing command (a failed command fails the
+# build, as a failed Python cell does).
+os.environ["PATH"] = str(Path(sys.executable).parent) + os.pathsep + os.environ.get("PATH", "")
+os.environ["BASH_ENV"] = str(DOCS / "_ext" / "bash_env.sh")
 
 project = "gnibench"
 author = "the gnibench developers"

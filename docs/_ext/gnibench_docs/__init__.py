@@ -15,15 +15,16 @@ When the build starts (``builder-inited``) it writes, into the source tree (git-
 It also adds the directive ``gnibench-schema`` (the key tables of the TOML schemas) and
 orders the globs of ``toctree`` (:mod:`.toctree`).
 Files are written only when their text changes, so an incremental build re-reads only those.
+The generators import nothing of Sphinx, so that the tests (``tests/docs/``) can run them.
 """
 from __future__ import annotations
 
 from pathlib import Path
 
-from . import catalogue, claims, gallery, interfaces, performance, registry, toctree
-
 
 def generate(app) -> None:
+    from . import catalogue, claims, gallery, interfaces, performance, registry
+
     srcdir = Path(app.srcdir)
     repo = srcdir.parent
     registry.write(srcdir)
@@ -35,6 +36,8 @@ def generate(app) -> None:
 
 
 def setup(app):
+    from . import interfaces, toctree     # Sphinx's modules: the generators above need none
+
     app.connect("builder-inited", generate)
     app.add_directive("gnibench-schema", interfaces.SchemaDirective)
     app.add_directive("toctree", toctree.OrderedTocTree, override=True)

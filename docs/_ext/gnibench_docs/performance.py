@@ -90,6 +90,38 @@ def run_section(machine: str, path: Path, doc: dict, repo: Path) -> str:
     return "\n".join(out)
 
 
+def mutation_section(repo: Path) -> str:
+    """The newest saved mutation campaign (``benchmarks/mutants-*.json``, written by
+    ``gnibench verify --mutants``): its score, date, scale, and what killed each mutant."""
+    import json
+
+    files = sorted((repo / "benchmarks").glob("mutants-*.json"))
+    docs = []
+    for f in files:
+        try:
+            docs.append((str(json.loads(f.read_text(encoding="utf-8")).get("date", "")), f))
+        except (ValueError, OSError):
+            continue
+    if not docs:
+        return ""
+    date, path = max(docs)
+    doc = json.loads(path.read_text(encoding="utf-8"))
+    rows = []
+    for m in doc.get("mutants", []):
+        by = ", ".join(m.get("claims") or []) or ", ".join(m.get("tests") or []) or m.get("crash", "")
+        rows.append([code(m.get("id")), cell("killed" if m.get("killed") else "survived"),
+                     cell(by or m.get("blind_spot", "")), cell(m.get("description", ""))])
+    base = doc.get("baseline") or {}
+    return (f"## The last saved mutation campaign: {date}\n\n"
+            f"`gnibench verify --mutants` at the {doc.get('scale', '?')} scale, file "
+            f"{code(path.relative_to(repo))}: **{doc.get('killed')} of {doc.get('total')} mutants "
+            f"killed** (campaign {'complete' if doc.get('complete') else 'incomplete'}; the "
+            f"unmutated baseline: {cell(base.get('verdicts', ''))}, "
+            f"{len(base.get('unexpected') or [])} unexpected). {{doc}}`/explanation/mutation` "
+            "says what this measures.\n\n"
+            + table(["mutant", "outcome", "killed by", "the bug"], rows))
+
+
 def page(repo: Path) -> str:
     out = [INTRO]
     found = False
@@ -101,6 +133,7 @@ def page(repo: Path) -> str:
         out.append("No saved benchmark run was found when this page was built. Run "
                    "`pytest benchmarks --benchmark-only` and `gnibench bench` in the repository, "
                    "then build the documentation again.\n")
+    out.append(mutation_section(repo))
     return "\n".join(out)
 
 
