@@ -51,7 +51,7 @@ Ids: those of the claims inventory, and ``<id>.corrected`` for the corrected rel
 printed statement keeps the inventory id).
 
 The keys, their types, defaults and what each allows are the fields of :class:`Claim` and
-:class:`Value` below (a new key is one line there; the README's table of claim keys is rendered
+:class:`Value` below (a new key is one line there; the documentation's table of claim keys is rendered
 from them); the rules between keys are :meth:`Claim._one_way`. Expressions are those of
 :mod:`gnibench.suite.foundation.expressions` (bounded, checked when the ledger is read).
 """
