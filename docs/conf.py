@@ -67,7 +67,7 @@ nb_execution_raise_on_error = True              # a failed cell fails the build
 nb_execution_show_tb = True
 nb_execution_timeout = 900
 nb_execution_in_temp = True                     # the notebooks write into a temporary folder
-nb_merge_streams = True
+nb_merge_streams = False                        # progress on stderr is hidden by the tag remove-stderr
 
 # --- API reference: autodoc + numpydoc --------------------------------------------------------
 autodoc_typehints = "none"                      # numpydoc's Parameters section says the types

@@ -12,7 +12,8 @@ When the build starts (``builder-inited``) it writes, into the source tree (git-
 * ``gallery/figures/``: the seeds' figures drawn by this build beside their verdicts
   (:mod:`.gallery`).
 
-It also adds the directive ``gnibench-schema`` (the key tables of the TOML schemas) and
+It also adds the directives ``gnibench-schema`` (the key tables of the TOML schemas) and
+``gnibench-statuses`` (the statuses, from their enum), and
 orders the globs of ``toctree`` (:mod:`.toctree`).
 Files are written only when their text changes, so an incremental build re-reads only those.
 The generators import nothing of Sphinx, so that the tests (``tests/docs/``) can run them.
@@ -40,5 +41,6 @@ def setup(app):
 
     app.connect("builder-inited", generate)
     app.add_directive("gnibench-schema", interfaces.SchemaDirective)
+    app.add_directive("gnibench-statuses", interfaces.StatusesDirective)
     app.add_directive("toctree", toctree.OrderedTocTree, override=True)
     return {"version": "1", "parallel_read_safe": True, "parallel_write_safe": True}

@@ -78,7 +78,7 @@ def _choices(description: str) -> list[str]:
             current.append(line)
         else:
             current = None
-    return [" ".join(" ".join(x) for x in c).replace("(choice) ", "", 1) for c in out]
+    return [" ".join(" ".join(c).split()).replace("(choice) ", "", 1) for c in out]
 
 
 def figure_page(fid: str, meta: dict | None, tree: Tree, figdir: Path | None, ledger) -> str:

@@ -83,7 +83,9 @@ def api_page() -> str:
 
     out = [API_INTRO]
     functions, classes = [], []
-    for name in api_names():
+    first = ["solve", "run", "verify", "reproduce", "report", "load"]
+    names = sorted(api_names(), key=lambda n: (n not in first, first.index(n) if n in first else 0, n))
+    for name in names:
         obj = getattr(gnibench, name)
         (classes if inspect.isclass(obj) else functions).append(name)
     out.append("## Functions\n")
@@ -122,5 +124,28 @@ class SchemaDirective(SphinxDirective):
         text = schema_docs.render(self.arguments[0])
         node = nodes.container(classes=["gnibench-schema"])
         self.state.nested_parse(StringList(text.splitlines(), source="gnibench-schema"),
+                                self.content_offset, node)
+        return [node]
+
+
+def statuses_table() -> str:
+    """The statuses a cell can end with, from the one status enum (internal codes left out)."""
+    from gnibench.suite.foundation.status import Status
+
+    from .common import cell, code, table
+
+    kinds = {"final": "the end", "failure": "a failure", "table": "in experiments"}
+    rows = [[code(s.value), cell(kinds.get(s.kind, s.kind)), cell(s.doc)]
+            for s in Status if s.kind != "internal"]
+    return table(["status", "kind", "meaning"], rows)
+
+
+class StatusesDirective(SphinxDirective):
+    """```{gnibench-statuses}``` renders the table of statuses from
+    :class:`gnibench.suite.foundation.status.Status`."""
+
+    def run(self):
+        node = nodes.container(classes=["gnibench-statuses"])
+        self.state.nested_parse(StringList(statuses_table().splitlines(), source="gnibench-statuses"),
                                 self.content_offset, node)
         return [node]

@@ -178,9 +178,20 @@ def tableau(m) -> str:
         return ""
 
 
+def short(doc: str, limit: int = 60) -> str:
+    """A record's one-line description cut to a title: its first clause when it is long."""
+    doc = " ".join(doc.split())
+    if len(doc) <= limit:
+        return doc
+    import re
+
+    head = re.split(r"[:;(]| - ", doc, maxsplit=1)[0].strip().rstrip(",")
+    return head if 0 < len(head) <= limit else doc[:limit].rsplit(" ", 1)[0] + " …"
+
+
 def method_page(m) -> str:
     d = m.describe()
-    out = [f"# `{m.id}`: {d['doc']}\n", f"Source: {d['reference']}\n"]
+    out = [f"# `{m.id}`: {short(d['doc'])}\n", f"{d['doc']}\n", f"Source: {d['reference']}\n"]
     facts = [["kind", cell(d.get("kind", "compiled"))], ["family", cell(d.get("family", ""))],
              ["order", cell(d.get("order") or "not declared")],
              ["properties", cell(_properties(d))]]
@@ -211,7 +222,7 @@ def modifier_page(m) -> str:
     d = m.describe()
     acts = {"field": "adds a term to the vector field F, which any base method then integrates",
             "step": "maps the result of each step of the base method"}.get(d.get("acts_on"), "")
-    out = [f"# `+{m.id}`: {d['doc']}\n", f"Source: {d['reference']}\n",
+    out = [f"# `+{m.id}`: {short(d['doc'])}\n", f"{d['doc']}\n", f"Source: {d['reference']}\n",
            f"A modifier: it {acts}. Write it after a base method: "
            f"`rk4:h=0.01+{m.id}[:option=value,...]`.\n"]
     if getattr(m, "needs_independent", False):
