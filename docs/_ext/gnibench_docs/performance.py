@@ -65,6 +65,17 @@ def _seconds(x: float, unit: str) -> str:
     return f"{x:.3g} s"
 
 
+def _ratio(name: str, medians: dict[str, float]) -> str:
+    """A numba kernel's median over the C loop's of the same run (``gnibench bench``'s pairs)."""
+    if not name.endswith(" numba"):
+        return ""
+    stem = name[: -len(" numba")]
+    for c in (f"{stem} C -O3", f"{stem} C port"):
+        if c in medians and medians[c] > 0:
+            return f"{medians[name] / medians[c]:.2f}"
+    return ""
+
+
 def run_section(machine: str, path: Path, doc: dict, repo: Path) -> str:
     info = doc.get("machine_info") or {}
     commit = doc.get("commit_info") or {}
@@ -78,6 +89,8 @@ def run_section(machine: str, path: Path, doc: dict, repo: Path) -> str:
     out = [f"## {machine}: {str(doc.get('datetime', ''))[:19]}\n",
            f"Measured on {cell(where)} at commit {code(str(commit.get('id', ''))[:10])}"
            + (" (uncommitted changes)" if commit.get("dirty") else "") + f"; file {code(shown)}.\n"]
+    medians = {str(b.get("name")): float((b.get("stats") or {}).get("median", float("nan")))
+               for b in doc["benchmarks"]}
     rows = []
     for b in doc["benchmarks"]:
         stats, extra = b.get("stats") or {}, b.get("extra_info") or {}
@@ -85,9 +98,13 @@ def run_section(machine: str, path: Path, doc: dict, repo: Path) -> str:
         rows.append([cell(b.get("group") or "other"), code(b.get("name")),
                      cell(_seconds(float(stats.get("median", float("nan"))), unit)),
                      cell(_seconds(float(stats.get("min", float("nan"))), unit)),
-                     cell(unit), cell(stats.get("rounds") or "")])
-    out.append(table(["group", "benchmark", "median", "min", "unit", "rounds"], rows))
+                     cell(unit), cell(_ratio(str(b.get("name")), medians))])
+    out.append(table(["group", "benchmark", "median", "min", "unit", "median / C's"], rows))
     return "\n".join(out)
+
+
+def _verdicts(counts: dict) -> str:
+    return ", ".join(f"{n} {v}" for v, n in counts.items()) or "–"
 
 
 def mutation_section(repo: Path) -> str:
@@ -116,7 +133,7 @@ def mutation_section(repo: Path) -> str:
             f"`gnibench verify --mutants` at the {doc.get('scale', '?')} scale, file "
             f"{code(path.relative_to(repo))}: **{doc.get('killed')} of {doc.get('total')} mutants "
             f"killed** (campaign {'complete' if doc.get('complete') else 'incomplete'}; the "
-            f"unmutated baseline: {cell(base.get('verdicts', ''))}, "
+            f"unmutated baseline: {_verdicts(base.get('verdicts') or {})}, "
             f"{len(base.get('unexpected') or [])} unexpected). {{doc}}`/explanation/mutation` "
             "says what this measures.\n\n"
             + table(["mutant", "outcome", "killed by", "the bug"], rows))
