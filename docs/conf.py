@@ -102,7 +102,7 @@ intersphinx_mapping = {
     "rebound": ("https://rebound.readthedocs.io/en/latest", str(_INV / "rebound.inv")),
     "matplotlib": ("https://matplotlib.org/stable", str(_INV / "matplotlib.inv")),
 }
-intersphinx_disabled_reftypes = ["*"]          # external links only where a page asks for them
+intersphinx_disabled_reftypes = ["std:doc"]    # Sphinx's default: objects, never whole pages
 
 # --- bibliography -----------------------------------------------------------------------------
 bibtex_bibfiles = ["references.bib"]

@@ -15,7 +15,7 @@ every inventory that ``conf.py``'s ``intersphinx_mapping`` reads is a file in th
       python docs/_inv/make_inventories.py
 
 The format is Sphinx's inventory version 2: four header lines, then zlib-compressed lines
-``name domain:role priority uri display`` (``$`` in the uri stands for the name).
+``name domain:role priority uri display`` (``$`` in the entries below stands for the name).
 """
 from __future__ import annotations
 
@@ -55,7 +55,7 @@ def inventory(project: str, version: str, entries: list[tuple[str, str, str]]) -
     """The bytes of a Sphinx inventory (version 2) holding ``entries``."""
     header = (f"# Sphinx inventory version 2\n# Project: {project}\n# Version: {version}\n"
               "# The remainder of this file is compressed using zlib.\n")
-    body = "".join(f"{name} {role} 1 {uri} -\n" for name, role, uri in entries)
+    body = "".join(f"{name} {role} 1 {uri.replace('$', name)} -\n" for name, role, uri in entries)
     return header.encode() + zlib.compress(body.encode())
 
 
