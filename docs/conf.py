@@ -21,9 +21,9 @@ sys.path.insert(0, str(DOCS / "_ext"))
 
 import gnibench  # noqa: E402
 
-# The executed pages run `gnibench` in %%bash cells: the command of this interpreter's
-# environment, and every cell stops at its first failing command (a failed command fails the
-# build, as a failed Python cell does).
+# The executed pages run shell commands through bash (their helper `sh`): `gnibench` is the
+# command of this interpreter's environment, and a command line stops at its first failing
+# command (a failed command fails the build, as a failed Python cell does).
 os.environ["PATH"] = str(Path(sys.executable).parent) + os.pathsep + os.environ.get("PATH", "")
 os.environ["BASH_ENV"] = str(DOCS / "_ext" / "bash_env.sh")
 
@@ -67,7 +67,9 @@ nb_execution_raise_on_error = True              # a failed cell fails the build
 nb_execution_show_tb = True
 nb_execution_timeout = 900
 nb_execution_in_temp = True                     # the notebooks write into a temporary folder
-nb_merge_streams = False                        # progress on stderr is hidden by the tag remove-stderr
+nb_merge_streams = True                         # one output block per stream and cell
+nb_output_stderr = "remove"                     # progress lines (stderr) are not shown; a failure
+                                                # still fails the build
 
 # --- API reference: autodoc + numpydoc --------------------------------------------------------
 autodoc_typehints = "none"                      # numpydoc's Parameters section says the types
