@@ -80,7 +80,7 @@ class RunResult:
         share : float
             The share of the orbits that must reach it (0 < share <= 1).
         measure : str or None
-            The error (a column of :attr:`ensemble`); default ``max_global_error`` where there
+            The error (a column of ``RunResult.ensemble``); default ``max_global_error`` where there
             is a reference, else the first integral's ``max_abs_err_<I>``.
         problem : str or None
             The cells of this problem spec only (default: all).
