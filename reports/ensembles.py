@@ -193,7 +193,8 @@ def _cost(c: Cost, scale: float = 1.0) -> str:
 def ensemble_work_precision(result, measure: str | None = None, problem: str | None = None):
     """The statistical work-precision diagram of a run's ensemble cells (a
     :class:`gnibench.RunResult`, or anything with its ``cells``, ``ensemble`` and
-    ``ensemble_stats`` tables), as a matplotlib Figure (see the module docstring).
+    ``ensemble_stats`` tables), as a pyplot figure (a notebook shows it; close it with
+    ``matplotlib.pyplot.close``; see the module docstring).
 
     Parameters
     ----------
@@ -205,11 +206,13 @@ def ensemble_work_precision(result, measure: str | None = None, problem: str | N
     problem : str or None
         The cells of this problem spec only (default: all).
     """
+    import matplotlib.pyplot as plt
     from gnibench.reports.render import figure
     from gnibench.suite.foundation.errors import UserError
 
     if getattr(result, "ensemble", None) is None:
         raise UserError("this run has no ensemble cells ([cells.ensemble])")
     measure = measure_of(result.ensemble, measure)
-    fig, _ = figure(work_precision(result.cells, result.ensemble_stats, measure, problem))
+    plot = work_precision(result.cells, result.ensemble_stats, measure, problem)
+    fig, _ = figure(plot, plt.figure(figsize=plot.size))      # pyplot's: a notebook shows it
     return fig

@@ -227,14 +227,18 @@ def _render(plot: Plot, path: Path) -> None:
     _write_png(canvas, path)
 
 
-def figure(plot: Plot):
-    """The matplotlib Figure of ``plot`` (not drawn yet) and its Agg canvas: what :func:`render`
-    writes, and what the plot helpers of the API return (``gnibench.plot``)."""
+def figure(plot: Plot, fig=None):
+    """The matplotlib Figure of ``plot`` (not drawn yet) and its canvas: what :func:`render`
+    writes (a new Figure on an Agg canvas), or ``plot`` drawn into ``fig`` (the plot helpers of
+    the API draw into a pyplot figure, which a notebook shows)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=plot.size, dpi=DPI)
-    canvas = FigureCanvasAgg(fig)
+    if fig is None:
+        fig = Figure(figsize=plot.size, dpi=DPI)
+        canvas = FigureCanvasAgg(fig)
+    else:
+        canvas = fig.canvas
     axes = fig.subplots(plot.rows, plot.cols, squeeze=False).ravel()
     fig.subplots_adjust(**plot.adjust)
     for ax in axes[len(plot.panels):]:

@@ -84,3 +84,7 @@ def test_the_plot_helper_draws_the_median_band_and_failure_rate(result):
     medians = result.ensemble_stats.query("metric == 'max_global_error'")["median"].to_numpy()
     drawn = np.concatenate([line.get_ydata() for line in left.get_lines()])
     assert sorted(drawn) == sorted(medians)
+    import matplotlib.pyplot as plt
+
+    assert plt.fignum_exists(fig.number)                  # pyplot's: a notebook shows it
+    plt.close(fig)
