@@ -206,8 +206,9 @@ def cells_table(rows: list[dict]) -> pd.DataFrame:
     if not rows:                         # a figure of fields only has no cells
         return pd.DataFrame({c: pd.Series(dtype="object") for c in CELL_COLUMNS})
     df = pd.DataFrame(sorted(rows, key=lambda r: r["cell"]))
-    for col in ("steps", "samples"):
-        df[col] = df[col].astype("Int64")
+    for col in ("steps", "samples", "orbits", "failed_orbits"):     # the last two: ensembles
+        if col in df.columns:
+            df[col] = df[col].astype("Int64")
     errs = [c for c in df.columns if c.startswith("max_abs_err_")]
     glob = ["final_global_error", "max_global_error"]
     extra = [c for c in df.columns if c not in CELL_COLUMNS and c not in errs and c not in glob]
