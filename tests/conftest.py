@@ -14,11 +14,6 @@ unloaded after it.
 from __future__ import annotations
 
 import pytest
-from gnibench.suite.foundation import datastack
-
-# the test processes do gnibench's work as its commands and API do, with the frame-stack chunks
-# kept for reuse (suite/foundation/datastack.py; tests/kernels/test_datastack.py also runs without them)
-datastack.install()
 
 #: the costliest modules, longest first: their summed test durations (s) in a cold run (empty
 #: kernel cache) on 2 cores, 2026-11-27; the modules not listed follow in collection order

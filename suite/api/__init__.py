@@ -11,10 +11,7 @@ from gnibench.suite.api.listing import methods, metrics, problems
 from gnibench.suite.api.running import RunResult, report, reproduce, run, verify
 from gnibench.suite.api.solving import Trajectory, solve
 from gnibench.suite.cell.user.loader import load
-from gnibench.suite.foundation import datastack
 from gnibench.suite.foundation.errors import UserError
-
-datastack.install()     # CPython's frame stack without mmap churn (suite/foundation/datastack.py)
 
 __all__ = ["RunResult", "Trajectory", "UserError", "load", "methods", "metrics", "problems",
            "report", "reproduce", "run", "solve", "verify"]
