@@ -63,7 +63,7 @@ Gamma_k), the section coordinates, the remaining state components, and ``err_<in
 from __future__ import annotations
 
 import numpy as np
-from gnibench.methods.events import HENON_MAX_SUBSTEPS, HENON_RTOL
+from gnibench.methods.assembly.sections import HENON_MAX_SUBSTEPS, HENON_RTOL
 from gnibench.suite.cell.calls import Buffers
 from gnibench.suite.cell.compiled import dense_output_refusal, problem_kernel
 from gnibench.suite.cell.drivers import AdaptiveDriver, FixedStepDriver, build_trajectory, kind_of

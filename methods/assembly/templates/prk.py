@@ -10,23 +10,10 @@ An implicit RK method is the case AU = AV.
 from __future__ import annotations
 
 import numpy as np
-from gnibench.methods.kernels.free import (
-    NEWTON_MAXIT,
+from gnibench.methods.assembly.templates.slots import (
     STATUS_NEWTON_FAILED,
     STATUS_OK,
-    N,
-    S,
-    f,
-    fjac,
-    lu_solve,
-    newton_done,
-    shifted,
-    store,
-    to_tuple,
 )
-
-AU = AV = BU = BV = IN_U = ()       # bound in the generated module (methods/prk.py)
-
 
 def make_ws():
     return (np.zeros((S, N)), np.empty((S, N)), np.empty((S * N, S * N)), np.empty(S * N),

@@ -34,12 +34,13 @@ made from methods/kernels/adaptive.py), so that the plain driver compiles withou
 """
 from __future__ import annotations
 
-from gnibench.methods.kernels.free import (
-    COMPENSATED,
-    GRID,
+from gnibench.methods.assembly.templates.slots import (
     ROW_CARRY,
     ROW_Y,
-    SECTION,
+    STATUS_BUFFER_FULL,
+    STATUS_NONFINITE,
+    STATUS_OK,
+    STATUS_PAUSED,
     ST_FOUND,
     ST_KOUT,
     ST_LAST_ROW,
@@ -50,38 +51,10 @@ from gnibench.methods.kernels.free import (
     ST_STEPS,
     ST_TCOMP,
     ST_WANTED,
-    STATUS_BUFFER_FULL,
-    STATUS_NONFINITE,
-    STATUS_OK,
-    STATUS_PAUSED,
-    N,
-    carry_zero,
-    crosses,
-    grid_rows,
-    invariants,
-    make_ws,
-    post_step,
-    project,
-    section_g_0,
-    section_rows,
-    step,
-    step_sum,
-    store,
-    to_tuple,
 )
 
 
-def record_row(out_t, out_y, out_c, row, t, y, steps, nfev, njev, rejected):
-    """Write one sample: time, state and the cumulative counters."""
-    out_t[row] = t
-    store(y, out_y, row)
-    out_c[row, 0] = steps
-    out_c[row, 1] = nfev
-    out_c[row, 2] = njev
-    out_c[row, 3] = rejected
-
-
-def partial_fixed(y, e, fy, sigma, par, ws, k):
+def partial_step(y, e, fy, sigma, par, ws, k):
     """A partial step of a fixed-step method: its own step of size sigma (time grid) from y (+ e)."""
     if COMPENSATED:
         y1, _, nf, nj, s = step_sum(y, e, sigma, par, ws)
@@ -208,8 +181,3 @@ def integrate(y_io, st, par, h, nsteps, h_last, every, dt_out, n_out, budget, ou
     if GRID:
         st[ST_KOUT] = kout
     return status, row
-
-
-def eval_invariants(Y, par, rows, out):
-    for r in range(rows):
-        store(invariants(to_tuple(Y[r]), par), out, r)

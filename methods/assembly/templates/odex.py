@@ -20,31 +20,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from gnibench.methods.kernels.free import (
+from gnibench.methods.assembly.templates.slots import (
     ACCEPT,
-    COMPENSATED,
     REJECT,
     STATUS_OK,
     UNSTABLE,
-    N,
-    carry_add,
-    f,
-    to_tuple,
-    to_tuple_shift,
 )
-
-# bound in each generated module (methods/extrapolation.py writes them)
-NJ = WORK_A = ()
-KMAX = K_FIXED = MSTAB = JSTAB = 0
-SAFE1 = SAFE2 = SAFE3 = FAC1 = FAC2 = FAC3 = FAC4 = UROUND = 0.0
-
-
-def _unbound(*args):  # pragma: no cover - only reached if a template is called un-generated
-    raise RuntimeError("kernel template called outside a generated module")
-
-
-first_step = scaled = _unbound        # adaptive.first_step; scaled(a, v) -> a v as a tuple
-
 
 def gragg_column(y, fy, h, nj, par, T, row, check, rtol, atol):
     """Gragg's midpoint rule with nj substeps plus the smoothing step (HNW (9.13)).
@@ -130,7 +111,7 @@ def solution(y, e, T):
     return y1, e1         # (one return: written inline, suite/foundation/inline.py)
 
 
-def partial_adaptive(y, e, fy, sigma, par, ws, kc):
+def partial_step(y, e, fy, sigma, par, ws, kc):
     """odex's own step of size sigma with the kc lines of the accepted step (T_kc,kc, order 2 kc;
     the tableau T is scratch between steps): a partial step for the time grid."""
     T = ws[0]

@@ -16,24 +16,10 @@ The first step is h0, or Hairer's HINIT heuristic (methods/kernels/adaptive.py `
 """
 from __future__ import annotations
 
-from gnibench.methods.kernels.free import (
+from gnibench.methods.assembly.templates.slots import (
     ACCEPT,
-    BETA,
-    COMPENSATED,
-    EXPO,
-    FAC1,
-    FAC2,
-    FSAL,
     REJECT,
-    SAFE,
-    STAGES_NEW,
     STATUS_OK,
-    attempt,
-    attempt_stages,
-    carry_zero,
-    dense_from_stages,
-    f,
-    first_step,
 )
 
 
@@ -94,7 +80,7 @@ def dense_coeffs(y, h, par, fy):
     return y1, dense_from_stages(y, y1, h, par, ks, f1)
 
 
-def partial_adaptive(y, e, fy, sigma, par, ws, k):
+def partial_step(y, e, fy, sigma, par, ws, k):
     """A partial step of an embedded pair: its own step of size sigma from y (+ e; fy = f(y)), the
     error estimate unused (time grid without dense output)."""
     y1 = attempt(y, e, fy, sigma, par, ws, 1.0, 1.0)[0]

@@ -22,35 +22,15 @@ from __future__ import annotations
 
 import math
 
-from gnibench.methods.kernels.free import (
+from gnibench.methods.assembly.templates.slots import (
     GRID_ULPS,
-    HENON_MAX_SUBSTEPS,
-    HENON_RTOL,
-    HENON_STAGES,
-    HENON_WALK_MAX,
-    PARTIAL,
-    ROOT_SLOPE,
-    ROOT_VALUE,
+    STATUS_OK,
     ST_FOUND,
     ST_HENON_FAILED,
     ST_LOC_NFEV,
     ST_MAX_G,
     ST_SUBSTEPS,
     ST_WALKS,
-    STATUS_OK,
-    N,
-    dense_eval,
-    dense_slope,
-    flow_run,
-    henon_join,
-    henon_run,
-    henon_slope,
-    henon_state,
-    post_step,
-    project,
-    record_row,
-    section_cond_0,
-    section_g_0,
 )
 
 EPS = 2.220446049250313e-16
@@ -173,7 +153,7 @@ def dense_root(cf, par, tc, tk, g_lo, g_hi, best_g, best_u):
     while it < DENSE_MAXIT:
         it += 1
         u = dense_eval(cf, theta)
-        gu = ROOT_VALUE(u, par, tc, tk)
+        gu = root_value(u, par, tc, tk)
         if abs(gu) < best_g:
             best_g = abs(gu)
             best_theta = theta
@@ -186,7 +166,7 @@ def dense_root(cf, par, tc, tk, g_lo, g_hi, best_g, best_u):
         else:
             hi = theta
             g_hi = gu
-        slope = ROOT_SLOPE(u, dense_slope(cf, theta), par, tc)
+        slope = root_slope(u, dense_slope(cf, theta), par, tc)
         new = theta - gu / slope if slope != 0.0 else math.nan
         if not (lo < new < hi):
             new = 0.5 * (lo + hi)            # Newton left the bracket: bisect
@@ -215,7 +195,7 @@ def partial_sample(y0, e0, fy0, sigma, par, ws, k):
     """A partial step of size sigma from y0 (+ its carried compensation e0 under sum=compensated;
     the method's own step, then the step modifiers and the problem's identification map, as for
     every step): (y, nfev, njev, status)."""
-    y, nf, nj, s = PARTIAL(y0, e0, fy0, sigma, par, ws, k)
+    y, nf, nj, s = partial_step(y0, e0, fy0, sigma, par, ws, k)
     if s != STATUS_OK:
         return y, nf, nj, s
     y, s = project(y, par)

@@ -1,7 +1,7 @@
 """The resumable state of every compiled driver: the named slots of ``st`` and rows of ``y_io``.
 
-Every compiled driver (the fixed-step loop of methods/kernels/driver.py, the adaptive loop of
-methods/kernels/adaptive.py shared by the embedded pairs and odex, and their dense-output,
+Every compiled driver (the fixed-step loop of templates/fixed.py, the adaptive loop of
+templates/adaptive.py shared by the embedded pairs and odex, and their dense-output,
 time-grid and section variants) keeps its whole state between calls in two arrays, so that Python
 can empty a full output buffer, show progress or honour Ctrl-C and call again without changing a
 single operation:
@@ -17,6 +17,8 @@ The names are emitted as constants into every generated module (:func:`slot_cons
 templates and Python read the same numbers.
 """
 from __future__ import annotations
+
+from gnibench.suite.foundation.status import KERNEL_STATUSES, Status
 
 SLOTS = {
     "ST_STARTED": 0,      # 1 once the first call has written the initial point
@@ -80,16 +82,28 @@ ROW_Y = ROWS["ROW_Y"]
 ROW_F = ROWS["ROW_F"]
 ROW_CARRY = ROWS["ROW_CARRY"]
 
-#: the verdicts of an adaptive attempt (methods/kernels/adaptive.py): accept; reject (the
+#: the verdicts of an adaptive attempt (templates/adaptive.py): accept; reject (the
 #: controller picks a smaller step); unstable (odex's stability check failed: h * SAFE3)
 VERDICTS = {"ACCEPT": 0, "REJECT": 1, "UNSTABLE": 2}
+ACCEPT, REJECT, UNSTABLE = VERDICTS["ACCEPT"], VERDICTS["REJECT"], VERDICTS["UNSTABLE"]
+
+#: the kernel codes of :class:`~gnibench.suite.foundation.status.Status` the templates return
+STATUSES = {f"STATUS_{s.name}": s.code for s in KERNEL_STATUSES}
+STATUS_OK = Status.OK.code
+STATUS_NONFINITE = Status.NONFINITE.code
+STATUS_NEWTON_FAILED = Status.NEWTON_FAILED.code
+STATUS_MAX_STEPS = Status.MAX_STEPS.code
+STATUS_STEP_TOO_SMALL = Status.STEP_TOO_SMALL.code
+STATUS_BUFFER_FULL = Status.BUFFER_FULL.code
+STATUS_PAUSED = Status.PAUSED.code
 
 #: a grid time within GRID_ULPS ulps of a step end is that step end (no partial step)
 GRID_ULPS = 4.0
 
 
 def slot_constants() -> str:
-    """``ST_<NAME> = index`` and ``ROW_<NAME> = index`` lines (and the verdicts, GRID_ULPS) for a
-    generated module."""
-    return ("".join(f"{k} = {v}\n" for k, v in {**SLOTS, **ROWS, **VERDICTS}.items())
+    """The lines ``NAME = value`` of every constant above, for a kernel module: the templates
+    import them from here (so that they are valid Python), the module holds their values in its
+    own text (so that its hash, the key of its cache files, covers them)."""
+    return ("".join(f"{k} = {v}\n" for k, v in {**STATUSES, **SLOTS, **ROWS, **VERDICTS}.items())
             + f"GRID_ULPS = {GRID_ULPS!r}\n")

@@ -15,24 +15,9 @@ solver, so ``njev`` records where the iteration did not converge). Under ``sum=c
 from __future__ import annotations
 
 import numpy as np
-from gnibench.methods.kernels.free import (
-    FIXED_POINT_AT,
-    NEWTON_MAXIT,
+from gnibench.methods.assembly.templates.slots import (
     STATUS_NEWTON_FAILED,
     STATUS_OK,
-    A,
-    D,
-    N,
-    S,
-    carry_add,
-    carry_apply,
-    f,
-    fjac,
-    lu_solve,
-    newton_done,
-    shifted,
-    store,
-    to_tuple,
 )
 
 
@@ -41,7 +26,7 @@ def make_ws():
             np.empty((N, N)), np.empty(S * N, dtype=np.int64), np.empty(N))
 
 
-def stages(y, h, par, ws):
+def stages_newton(y, h, par, ws):
     """Newton for the stage increments Z (in ws[0]): (nfev, njev, status)."""
     Z, F, M, r, J, piv, _ = ws
     scale = 1.0
@@ -106,7 +91,7 @@ def increment(ws):
 
 
 def step(y, h, par, ws):
-    nfev, njev, s = stages(y, h, par, ws)
+    nfev, njev, s = solve_stages(y, h, par, ws)
     y1 = y                     # (one return: written inline, suite/foundation/inline.py)
     if s == STATUS_OK:
         y1 = carry_apply(y, increment(ws))
@@ -149,7 +134,7 @@ def stages_fixed_point(y, h, par, ws):
 
 
 def step_sum(y, e, h, par, ws):
-    nfev, njev, s = stages(y, h, par, ws)
+    nfev, njev, s = solve_stages(y, h, par, ws)
     y1, e1 = y, e
     if s == STATUS_OK:
         y1, e1 = carry_add(y, e, increment(ws))

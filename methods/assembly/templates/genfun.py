@@ -15,18 +15,11 @@ Free names bound in the generated module: D (degrees of freedom) and the generat
 from __future__ import annotations
 
 import numpy as np
-from gnibench.methods.kernels.free import (
-    NEWTON_MAXIT,
+from gnibench.methods.assembly.templates.slots import (
     STATUS_NEWTON_FAILED,
     STATUS_OK,
-    N,
-    _unbound,
-    lu_solve,
-    newton_done,
 )
 
-D = 0
-gf_split = gf_join = gf_vec = gf_predict = gf_momentum = gf_position = _unbound
 
 
 def make_ws():

@@ -10,30 +10,19 @@ each block's increment (z_I, then h g_E) is added to y with the carried rounding
 from __future__ import annotations
 
 import numpy as np
-from gnibench.methods.kernels.free import (
-    E_IDX,
-    I_IDX,
-    NE,
-    NEWTON_MAXIT,
-    NI,
+from gnibench.methods.assembly.templates.slots import (
     STATUS_NEWTON_FAILED,
     STATUS_OK,
-    N,
-    carry_sum,
-    f,
-    fjac,
-    lu_solve,
-    newton_done,
-    to_tuple,
 )
 
 
-def make_ws_X():
-    return (np.empty((N, N)), np.empty((NI, NI)), np.empty(NI), np.empty(NI, dtype=np.int64),
+def block_ws(ni):
+    """The workspace of a block step whose implicit block has ni components."""
+    return (np.empty((N, N)), np.empty((ni, ni)), np.empty(ni), np.empty(ni, dtype=np.int64),
             np.empty(N), np.empty(N), np.empty(N))
 
 
-def step_X(y, h, par, ws):
+def block_step(y, h, par, ws, I_IDX, E_IDX):
     J, M, r, piv, ya, _, _ = ws
     scale = 1.0
     for i in range(N):
@@ -50,16 +39,16 @@ def step_X(y, h, par, ws):
         fjac(Y, par, J)
         nfev += 0.5
         njev += 1.0
-        for k in range(NI):
+        for k in range(len(I_IDX)):
             i = I_IDX[k]
             r[k] = y[i] + h * g[i] - ya[i]
-            for m in range(NI):
+            for m in range(len(I_IDX)):
                 M[k, m] = -h * J[i, I_IDX[m]]
             M[k, k] += 1.0
-        if not lu_solve(M, r, NI, piv):
+        if not lu_solve(M, r, len(I_IDX), piv):
             return y, nfev, njev, STATUS_NEWTON_FAILED
         dnorm = 0.0
-        for k in range(NI):
+        for k in range(len(I_IDX)):
             ya[I_IDX[k]] += r[k]
             dnorm = max(dnorm, abs(r[k]))
         if not dnorm < np.inf:
@@ -69,13 +58,13 @@ def step_X(y, h, par, ws):
         prev = dnorm
     g = f(to_tuple(ya), par)
     nfev += 0.5
-    for k in range(NE):
+    for k in range(len(E_IDX)):
         i = E_IDX[k]
         ya[i] = y[i] + h * g[i]
     return to_tuple(ya), nfev, njev, STATUS_OK
 
 
-def step_X_sum(y, e, h, par, ws):
+def block_step_sum(y, e, h, par, ws, I_IDX, E_IDX):
     J, M, r, piv, ya, za, ea = ws
     scale = 1.0
     for i in range(N):
@@ -93,16 +82,16 @@ def step_X_sum(y, e, h, par, ws):
         fjac(Y, par, J)
         nfev += 0.5
         njev += 1.0
-        for k in range(NI):
+        for k in range(len(I_IDX)):
             i = I_IDX[k]
             r[k] = h * g[i] - za[i]
-            for m in range(NI):
+            for m in range(len(I_IDX)):
                 M[k, m] = -h * J[i, I_IDX[m]]
             M[k, k] += 1.0
-        if not lu_solve(M, r, NI, piv):
+        if not lu_solve(M, r, len(I_IDX), piv):
             return y, e, nfev, njev, STATUS_NEWTON_FAILED
         dnorm = 0.0
-        for k in range(NI):
+        for k in range(len(I_IDX)):
             i = I_IDX[k]
             za[i] += r[k]
             ya[i] = y[i] + za[i]
@@ -114,12 +103,12 @@ def step_X_sum(y, e, h, par, ws):
         prev = dnorm
     for i in range(N):
         ea[i] = e[i]
-    for k in range(NI):
+    for k in range(len(I_IDX)):
         i = I_IDX[k]
         ya[i], ea[i] = carry_sum(y[i], e[i], za[i])
     g = f(to_tuple(ya), par)
     nfev += 0.5
-    for k in range(NE):
+    for k in range(len(E_IDX)):
         i = E_IDX[k]
         ya[i], ea[i] = carry_sum(y[i], e[i], h * g[i])
     return to_tuple(ya), to_tuple(ea), nfev, njev, STATUS_OK

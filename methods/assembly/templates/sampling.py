@@ -16,24 +16,11 @@ dense-output copies only (0 elsewhere).
 """
 from __future__ import annotations
 
-from gnibench.methods.kernels.free import (
-    COMPENSATED,
-    DENSE_NFEV,
-    DENSE_OUTPUT,
-    GRID_SAMPLE,
+from gnibench.methods.assembly.templates.slots import (
     GRID_ULPS,
-    SECTION_DENSE,
+    STATUS_OK,
     ST_LOC_NFEV,
     ST_NEWTON,
-    STATUS_OK,
-    carry_apply,
-    dense_crossing,
-    dense_eval,
-    dense_from_stages,
-    dense_root_time,
-    henon_crossing,
-    record_row,
-    section_event,
 )
 
 EPS = 2.220446049250313e-16
@@ -74,7 +61,7 @@ def grid_rows(y0, e0, fy0, s0, es0, y1, s1, h, last, kout, tc, dt_out, n_out, ev
                         yk = dense_eval(cf, (tk - s0) / h)
                     sk = tk
                 else:
-                    theta, yk, _ = dense_root_time(cf, par, tc, tk, y0[tc] - tk,
+                    theta, yk, _ = dense_root(cf, par, tc, tk, y0[tc] - tk,
                                                    dense_eval(cf, 1.0)[tc] - tk,
                                                    abs(t_hi - tk), y1)
                     if theta == 1.0:
@@ -85,7 +72,7 @@ def grid_rows(y0, e0, fy0, s0, es0, y1, s1, h, last, kout, tc, dt_out, n_out, ev
                     else:
                         sk = s0 + theta * h
             else:
-                yk, sk, nf, nj, s = GRID_SAMPLE(y0, e0, fy0, s0, es0, y1, s1, h, tk, tc, par, ws,
+                yk, sk, nf, nj, s = grid_sample(y0, e0, fy0, s0, es0, y1, s1, h, tk, tc, par, ws,
                                                 kc)
                 nfev += nf
                 njev += nj
