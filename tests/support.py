@@ -43,11 +43,11 @@ def takes(pid: str, method: str) -> bool:
 @functools.cache
 def base_module(spec: str):
     """(module, problem Bound, par) of a problem's generated code (its own compiled module)."""
-    from gnibench.suite.cell.codegen import load_problem
+    from gnibench.methods.assembly import assemble_problem
     from gnibench.suite.cell.spec import parse_problem
 
     prob = parse_problem(spec)
-    mod, _ = load_problem(prob)
+    mod = assemble_problem(prob)
     return mod, prob, np.array(prob.record.par(prob.values), dtype=np.float64)
 
 

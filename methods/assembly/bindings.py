@@ -73,21 +73,24 @@ DRIVER_NAMES = {out.name: (kind, output) for kind, d in DRIVERS.items()
                 for output, out in d.outputs.items()}
 
 #: what every fixed-step family binds (the fixed loop, and the partial steps of its time grid)
-STEP = ("make_ws", "step", "step_sum")
+STEP = ("make_ws", "step")
+#: what it binds too under ``sum=compensated`` (the loops call it instead of ``step``)
+SUM = ("step_sum",)
 #: what a family that runs the adaptive loop binds (templates/adaptive.py, templates/sampling.py)
-ADAPTIVE_PART = ("adaptive_ws", "attempt", "attempt_stages", "attempt_outcome", "controller_init",
+ADAPTIVE_PART = ("adaptive_ws", "attempt", "attempt_outcome", "controller_init",
                  "controller_state", "controller_clip", "controller_prepare",
                  "controller_accept", "controller_reject", "first_step", "initial_step",
                  "partial_step", "to_tuple_shift", "FSAL", "IORD")
 #: what a pair with a continuous extension adds (the dense outputs, ``dense_coeffs``)
-DENSE_PART = ("dense_from_stages", "dense_eval", "dense_slope", "dense_coeffs", "DENSE_NFEV")
+DENSE_PART = ("attempt_stages", "dense_from_stages", "dense_eval", "dense_slope", "dense_coeffs",
+              "DENSE_NFEV")
 
 
 @dataclass(frozen=True)
 class Family:
     """A family's bindings: its step writer (steps/<module>.py) and, per driver kind it runs on,
-    the names that writer defines for the loop. ``dense``: the pair's extension, when it has one,
-    binds :data:`DENSE_PART` too."""
+    the names that writer defines for the loop (and :data:`SUM` under ``sum=compensated``).
+    ``dense``: a pair with a continuous extension binds :data:`DENSE_PART` too."""
 
     writer: str
     kinds: dict
@@ -103,8 +106,8 @@ FAMILIES = {
     "partitioned": Family("steps/partitioned.py", {"fixed": STEP}),
     "composition": Family("steps/partitioned.py (steps/prk.py: a user's basis)", {"fixed": STEP}),
     "partitioned-rk": Family("steps/prk.py", {"fixed": STEP}),
-    "splitting": Family("steps/lie_poisson.py", {"fixed": STEP[:2]}),
-    "generating-function": Family("steps/genfun.py", {"fixed": STEP[:2]}),
+    "splitting": Family("steps/lie_poisson.py", {"fixed": STEP}),
+    "generating-function": Family("steps/genfun.py", {"fixed": STEP}),
 }
 
 
