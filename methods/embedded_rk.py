@@ -7,7 +7,7 @@ One generator writes the cell's ``step`` (fixed step: the propagated solution) o
 (adaptive: also the scaled rms error and the verdict) and ``attempt_stages`` (the same lines, also
 returning the stages, for dense output); under ``sum=compensated`` they add the increment
 h Σ b_i k_i to y with the carried rounding error (methods/summation.py). The adaptive loop of
-methods/kernels/adaptive.py drives them with Hairer's controller (methods/kernels/pair.py).
+methods/assembly/templates/adaptive.py drives them with Hairer's controller (methods/assembly/templates/pair.py).
 """
 from __future__ import annotations
 

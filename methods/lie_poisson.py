@@ -137,7 +137,7 @@ lie_poisson = LiePoissonMethod(
     id="lie-poisson", family="splitting", order=2, reference="[B] §7.2; Ge-Marsden, Channell-Scovel",
     doc="Lie-Poisson splitting for euler-so4 into exact coadjoint rotations (Strang, or Yoshida's "
         "triple jump with order=4); conserves the Casimirs H1, H2 to round-off",
-    generate=write_lie_poisson, symmetric=True, needs=("so4",),
+    generate=write_lie_poisson(ROTATIONS, schedule), symmetric=True, needs=("so4",),
     field_modifiers_refused="it integrates (7.1) itself by exact sub-flows",
     params=(H_PARAM, Param("order", "2", "order of the composition: 2 (Strang) or 4 (Yoshida "
                                          "triple jump)", kind="str", choices=("2", "4"))))

@@ -20,7 +20,6 @@ import pytest
 COSTLIEST_FIRST = [
     "test_time_grid.py",          # 70
     "test_hlw_chapter_1.py",         # 55
-    "test_inline.py",             # 51
     "test_b_sections_7_8.py",      # 50
     "test_orders.py",             # 38
     "test_dense_output.py",       # 32

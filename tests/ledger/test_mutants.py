@@ -61,7 +61,7 @@ def test_compensated_twins_are_mutated_with_their_plain_step():
     """Every mutant of a generator that writes a plain step and a ``step_sum`` twin hits both
     (sum=compensated cells run the twin): the partitioned blocks and Störmer-Verlet's halves."""
     catalog, _ = M.load_catalog()
-    twins = {m.id: m for m in catalog if m.file == "methods/partitioned.py"}
+    twins = {m.id: m for m in catalog if m.file == "methods/assembly/steps/partitioned.py"}
     assert twins and all(len(m.edits()) == 2 for m in twins.values()), list(twins)
     assert all("_sum" in m.more[0][0] or "f(y, par)" in m.more[0][1] for m in twins.values())
 

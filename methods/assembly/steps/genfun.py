@@ -11,9 +11,13 @@ from gnibench.methods.assembly.templates import genfun
 from gnibench.suite.foundation.errors import UserError
 
 
-def write_genfun(ctx) -> str:
-    from gnibench.methods.generating_function import generating_code, generating_key
+def write_genfun(generating_code, generating_key):
+    """The writer of the method's step; ``generating_code(problem)`` gives the maps' text (from
+    sympy, cached), ``generating_key(problem)`` the digest of what it is made from."""
+    return lambda ctx: _write(ctx, generating_code, generating_key)
 
+
+def _write(ctx, generating_code, generating_key) -> str:
     if ctx.modified:        # refused at validation (field_modifiers_refused); a modified field has no H
         raise UserError("method generating-function4 cannot take a field modifier (observer, penalty)")
     problem = ctx.problem

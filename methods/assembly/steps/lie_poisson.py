@@ -19,16 +19,14 @@ def two_sum(a, b):
 """
 
 
-def _flow_source(i: int) -> str:
-    from gnibench.methods.lie_poisson import ROTATIONS
-
+def _flow_source(i: int, rotations) -> str:
     """flow_i(y, e, tau, par): the exact flow of (1/2) λ_i x_i² for the time tau, on x = y + e.
 
     The rotation is applied as x + (s R x - (1 - c) x) with 1 - c = 2 sin²(ωτ/2) (no cancellation),
     and the increment is added by an error-free sum whose error is kept in e (compensated summation,
     reset every step): H1, H2 then see one rounding per coordinate per step, not one per sub-flow.
     """
-    (a, b), (c, d) = ROTATIONS[i]
+    (a, b), (c, d) = rotations[i]
     out = ["", INTERNAL, f"def flow_{i}(y, e, tau, par):",
            (f"    # exact flow of (1/2) lam{i + 1} x{i + 1}^2: planes (x{a + 1}, x{b + 1}), "
             f"(x{c + 1}, x{d + 1})"),
@@ -46,16 +44,20 @@ def _flow_source(i: int) -> str:
     return "\n".join(out) + "\n"
 
 
-def write_lie_poisson(ctx) -> str:
-    from gnibench.methods.lie_poisson import ROTATIONS, schedule
+def write_lie_poisson(rotations, schedule):
+    """The writer of the splitting's step: ``rotations[i]`` the two planes of sub-flow i,
+    ``schedule(order)`` the (sub-flow, fraction of h) of one step (methods/lie_poisson.py)."""
+    return lambda ctx: _write(ctx, rotations, schedule)
 
+
+def _write(ctx, rotations, schedule) -> str:
     if ctx.modified:
         raise UserError("method lie-poisson integrates (7.1) itself by exact sub-flows and cannot "
                         "take a field modifier (observer, penalty); use +projection, or another method")
     plan = schedule(int(ctx.values["order"]))
     body = "".join(f"    y, e = flow_{i}(y, e, {w!r} * h, par)\n" for i, w in plan)
     final = ", ".join(f"y[{k}] + e[{k}]" for k in range(6))
-    return (TWO_SUM + "".join(_flow_source(i) for i in range(6))
+    return (TWO_SUM + "".join(_flow_source(i, rotations) for i in range(6))
             + f"\n{INTERNAL}\ndef make_ws():\n    return 0\n"
             + f"\n{INTERNAL}\ndef step(y, h, par, ws):\n"
             + "    e = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)\n"

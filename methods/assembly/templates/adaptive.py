@@ -1,9 +1,10 @@
 """The adaptive driver (template): one resumable loop for every adaptive method.
 
-The embedded pairs (Hairer's DOPRI5/DOP853 control, HNW I §II.4; methods/kernels/pair.py) and
-GBS extrapolation (ODEX's order and step control, HNW I §II.9; methods/kernels/extrapolation.py)
-share this loop; what differs is the family's attempt and its step-size controller, kept apart as
-diffrax keeps ``AbstractStepSizeController`` apart from the solver. Each family's module binds:
+The embedded pairs (Hairer's DOPRI5/DOP853 control, HNW I §II.4; templates/pair.py) and GBS
+extrapolation (ODEX's order and step control, HNW I §II.9; templates/odex.py) share this loop;
+what differs is the family's attempt and its step-size controller, kept apart as diffrax keeps
+``AbstractStepSizeController`` apart from the solver. Each family binds
+(methods/assembly/bindings.py ``ADAPTIVE_PART``):
 
 * ``adaptive_ws()``: per-call scratch (odex: its tableau T, H_j, W_j and the attempt's
   parameters and outcome; pairs: none);
@@ -21,26 +22,28 @@ diffrax keeps ``AbstractStepSizeController`` apart from the solver. Each family'
   and their outcome a constant: a wider call cost 2-4 % of dopri5's time per attempt (measured);
 * ``controller_accept(h, cs, err, reject, kc, ws, hmax) -> (h_new, cs)`` and
   ``controller_reject(h, cs, err, verdict, kc, ws, nacc) -> (h_new, cs, counted)``;
-* ``partial_adaptive``: its own step of a given size, for time-grid samples (``grid_rows``).
+* ``partial_step``: its own step of a given size, for time-grid samples (``grid_rows``).
 
 The loop: ``STATUS_STEP_TOO_SMALL`` when 0.1 |h| <= |t| eps; the last step lands
 exactly on t_end (t + 1.01 h > t_end: h = t_end - t); after an accepted step the step modifiers
 (``project``) and the problem's ``post_step`` map y_n+1, f(y_n+1) is the FSAL stage or evaluated,
 and the step's samples are written: every ``every`` accepted steps plus the final point, or the
 time grid (``grid_rows``), or the section crossings (``section_rows``;
-methods/kernels/sampling.py). Under ``sum=compensated`` (``COMPENSATED``) the attempt adds its
+templates/sampling.py). Under ``sum=compensated`` (``COMPENSATED``) the attempt adds its
 increment with the carried error e of y, t is summed with its carried error e_t, and the last step
 is (t_end - t) - e_t ([HLW] VIII.5; methods/summation.py).
 
 The driver is resumable: its whole state lives in ``y_io`` (y, f(y), the carry of y) and ``st``
-(the named slots of methods/kernels/slots.py), so Python can empty a full output buffer or show
+(the named slots of templates/slots.py), so Python can empty a full output buffer or show
 progress and call again without changing a single operation (``STATUS_BUFFER_FULL``,
 ``STATUS_PAUSED`` after ``budget`` attempts). When a step's grid samples do not fit the buffer, the
 step is undone (y, its carry, t, h, the controller's state, counters) and redone by the next call.
 
-The same template is generated in specialised copies, each flag a literal (``variant`` renaming),
-so that the plain driver compiles without the others' code (one driver carrying both the plain and
-the dense-output loops took 50 % longer to compile, measured on kepler-3d):
+Each output has a module of its own in which the flags are module constants
+(methods/assembly/bindings.py ``DRIVERS``), so that the plain driver compiles without the others'
+code (numba drops the branches of a constant test; one driver carrying both the plain and the
+dense-output loops took 50 % longer to compile, measured on kepler-3d). Python knows them by
+their outputs' names:
 
 * ``integrate_adaptive``: a sample every ``every`` accepted steps plus the final point; with a
   5th column in ``out_c``, the size of the step ending at each sample (tests/kernels/test_dense_output.py);
@@ -115,7 +118,7 @@ def first_step(y, fy, par, h0, hmax, rtol, atol):
     f(y0), plus HINIT's probe."""
     h = min(h0, hmax)
     nfev = 1.0
-    if not h0 > 0.0:          # (one return: written inline, suite/foundation/inline.py)
+    if not h0 > 0.0:
         h = initial_step(y, fy, par, hmax, rtol, atol)
         nfev = 2.0
     return h, nfev

@@ -7,7 +7,7 @@ Samples every ``every`` steps plus the final point; stops at the first failed st
 (``STATUS_NONFINITE``), keeping every sample taken so far plus the last good point.
 
 The driver is resumable, like the adaptive one: its whole state lives in ``y_io`` and ``st``
-(the named slots of methods/kernels/slots.py: steps done, nfev, njev, the step of the last sample,
+(the named slots of templates/slots.py: steps done, nfev, njev, the step of the last sample,
 started; under ``sum=compensated`` the carried compensation of y in ``y_io[ROW_CARRY]``), so the
 facade (:mod:`gnibench.suite.cell.drivers`) can call it again and again: it returns
 ``STATUS_PAUSED`` after ``budget`` steps (so that Python can show progress and honour Ctrl-C) and
@@ -15,16 +15,18 @@ facade (:mod:`gnibench.suite.cell.drivers`) can call it again and again: it retu
 continues with exactly the same operations.
 
 The step is the method's ``step(y, h, par, ws)``, or under ``sum=compensated`` (``COMPENSATED``,
-a constant of the generated module) ``step_sum(y, e, h, par, ws)``, which adds the increment with
+a constant of the kernel module) ``step_sum(y, e, h, par, ws)``, which adds the increment with
 the carried rounding error e ([HLW] VIII.5; methods/summation.py). The time is t_n = n h (the last
 step h_last), a product, not a running sum.
 
-The same template is generated three times (literal flags renamed, as the adaptive variants are
-made from methods/kernels/adaptive.py), so that the plain driver compiles without the others' code:
+Each output has a module of its own in which the flags are module constants
+(methods/assembly/bindings.py ``DRIVERS``), so that a driver compiles without the others' code
+(numba drops the branches of a constant test); Python knows the three by their outputs' names:
 
 * ``integrate`` (``SECTION`` = ``GRID`` = False): a sample every ``every`` steps;
 * ``integrate_grid`` (``GRID``): samples on the time grid t_k = k dt_out, k = 0, every, ... <
-  ``n_out``, plus the final point, by partial steps (``grid_rows_fixed``, methods/kernels/sampling.py);
+  ``n_out``, plus the final point, by partial steps (``grid_rows``, templates/sampling.py, over
+  :func:`partial_step`);
 * ``integrate_section`` (``SECTION``, problems with a Poincaré section): after each accepted step a
   crossing of g in (t_n, t_n+1] is located by Hénon's trick from y_n and written with the
   counters of its step (``section_rows``); the run stops with ``STATUS_OK`` after
@@ -55,7 +57,8 @@ from gnibench.methods.assembly.templates.slots import (
 
 
 def partial_step(y, e, fy, sigma, par, ws, k):
-    """A partial step of a fixed-step method: its own step of size sigma (time grid) from y (+ e)."""
+    """A partial step of a fixed-step method: its own step of size sigma (time grid) from y (+ e)
+    (``partial_step`` of the fixed kind's grid output)."""
     if COMPENSATED:
         y1, _, nf, nj, s = step_sum(y, e, sigma, par, ws)
         return y1, nf, nj, s

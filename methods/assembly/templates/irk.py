@@ -2,9 +2,10 @@
 
 Stage increments Z_i = Y_i - y solve Z_i = h sum_j a_ij f(y + Z_j); the new point is
 y1 = y + sum_j d_j Z_j with d = b^T A^{-1} (no extra f-evaluation). Newton uses the Jacobian of f
-at the current iterate (full Newton), so it converges quadratically to round-off.
+at the current iterate (full Newton, ``stages_newton``), so it converges quadratically to
+round-off. The cell's solver is bound as ``solve_stages`` (methods/assembly/steps/irk.py).
 
-``step_fixed_point`` (method option ``fixed_point = K``) solves the same equations by at most K
+``stages_fixed_point`` (method option ``fixed_point = K``) solves the same equations by at most K
 fixed-point iterations Z <- h A F(y + Z), the simplest solver and the one behind [HLW] Fig 2.4's
 implicit Euler (I.2.4): a step whose iteration has not converged after K iterations is accepted
 with its last iterate (not a failure), and counted in ``njev`` (no Jacobian is evaluated by this
@@ -37,7 +38,7 @@ def stages_newton(y, h, par, ws):
     nfev = 0.0
     njev = 0.0
     prev = np.inf
-    status = STATUS_OK         # (one return: written inline, suite/foundation/inline.py)
+    status = STATUS_OK
     for it in range(NEWTON_MAXIT + 1):
         if it == NEWTON_MAXIT:
             status = STATUS_NEWTON_FAILED
@@ -92,7 +93,7 @@ def increment(ws):
 
 def step(y, h, par, ws):
     nfev, njev, s = solve_stages(y, h, par, ws)
-    y1 = y                     # (one return: written inline, suite/foundation/inline.py)
+    y1 = y
     if s == STATUS_OK:
         y1 = carry_apply(y, increment(ws))
     return y1, nfev, njev, s

@@ -5,8 +5,7 @@ from __future__ import annotations
 def lu_solve(M, r, n, piv):
     """Solve M x = r in place (x returned in r) by Gaussian elimination with partial pivoting.
 
-    Returns False if M is singular to working precision. M is overwritten. (One return: written
-    inline, suite/foundation/inline.py.)
+    Returns False if M is singular to working precision. M is overwritten.
     """
     ok = True
     for k in range(n):

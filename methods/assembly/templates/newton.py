@@ -12,4 +12,4 @@ def newton_done(dnorm, prev, scale):
     done = dnorm >= prev and dnorm <= 1e-10 * scale
     if dnorm <= 8.881784197001252e-16 * scale:
         done = True
-    return done        # (one return: written inline, suite/foundation/inline.py)
+    return done

@@ -6,7 +6,7 @@ been added, ``T[0]`` holds the most extrapolated value T_jj and ``T[1]`` the sub
 whose difference is the error estimate (HNW I, §II.9, (9.22)-(9.23)). Columns are numbered from 1
 as in HNW; the arrays are indexed by ``j - 1``.
 
-The adaptive mode runs the resumable loop every adaptive method shares (methods/kernels/adaptive.py)
+The adaptive mode runs the resumable loop every adaptive method shares (templates/adaptive.py)
 with odex's attempt and controller below, after ODEX's ODXCOR with its default constants (HNW I,
 §II.9 "Order and step size control"): convergence monitor in line k-1, hope for convergence in
 line k+1, order and step chosen by the work per unit step W_j = A_j / H_j. The controller's state
@@ -42,7 +42,7 @@ def gragg_column(y, fy, h, nj, par, T, row, check, rtol, atol):
     hj = h / nj
     z_prev = scaled(0.0, fy)
     z_mid = scaled(hj, fy)                             # explicit Euler start
-    nfev = nj                  # (one return: written inline, suite/foundation/inline.py)
+    nfev = nj
     for m in range(1, nj):
         dy = f(to_tuple_shift(y, 1.0, z_mid), par)
         z_next = to_tuple_shift(z_prev, 2.0 * hj, dy)
@@ -108,7 +108,7 @@ def solution(y, e, T):
         y1, e1 = carry_add(y, e, to_tuple(T[0]))
     else:
         y1, e1 = to_tuple_shift(y, 1.0, to_tuple(T[0])), e
-    return y1, e1         # (one return: written inline, suite/foundation/inline.py)
+    return y1, e1
 
 
 def partial_step(y, e, fy, sigma, par, ws, kc):

@@ -1,7 +1,7 @@
 """The embedded pairs' part of the adaptive loop (templates): attempt and step-size controller.
 
-The loop is methods/kernels/adaptive.py. The pair's attempt is generated from its tableau
-(methods/embedded_rk.py): ``attempt`` returns y1, its carry, the scaled rms error and f(y1) when
+The loop is templates/adaptive.py. The pair's attempt is written from its tableau
+(methods/assembly/steps/pair.py): ``attempt`` returns y1, its carry, the scaled rms error and f(y1) when
 the pair has it, ``attempt_stages`` the same by the same operations plus the stages (dense
 output); under ``sum=compensated`` they add the increment h Σ b_i k_i to y with the carried
 rounding error e (methods/summation.py). The verdict is err <= 1 (``attempt_outcome``).
@@ -12,7 +12,7 @@ err <= 1. New step h / fac, fac = clip(err^EXPO / facold^BETA / SAFE, 1/FAC2, 1/
 stabilisation of DOPRI5, facold = max(err, 1e-4) of the last accepted step); after a rejection
 h / min(1/FAC1, err^EXPO / SAFE), and the next accepted step not larger than the rejected one;
 |h| <= hmax. Rejections before the first accepted step are not counted, as in Hairer's codes.
-The first step is h0, or Hairer's HINIT heuristic (methods/kernels/adaptive.py ``first_step``).
+The first step is h0, or Hairer's HINIT heuristic (templates/adaptive.py ``first_step``).
 """
 from __future__ import annotations
 

@@ -1,9 +1,11 @@
 """Partitioned Euler step (template), implicit in block I and explicit in block E, [HLW] (1.9).
 
 w1 = w0 + h g_I(w1, e0),  e1 = e0 + h g_E(w1, e0). With I = u this is symplectic Euler, with I = v
-its adjoint. Used when block I cannot be updated explicitly (otherwise the generator writes a
-straight tuple update). Evaluating only one block of f counts as half an f-evaluation. Under
-``sum=compensated`` (``step_X_sum``) Newton solves for the increment z_I = w1 - w0 instead, and
+its adjoint. Used when block I cannot be updated explicitly (otherwise the writer,
+methods/assembly/steps/partitioned.py, writes a straight tuple update); the index sets I and E
+are arguments, constant tuples of the kernel module (``block_step`` is written into its callers
+``pstep_u``/``pstep_v`` by numba's inliner). Evaluating only one block of f counts as half an
+f-evaluation. Under ``sum=compensated`` (``block_step_sum``) Newton solves for the increment z_I = w1 - w0 instead, and
 each block's increment (z_I, then h g_E) is added to y with the carried rounding error e
 (methods/summation.py).
 """

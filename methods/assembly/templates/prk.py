@@ -3,7 +3,7 @@
 Component i of the state belongs to the block u (``IN_U[i]``: tableau AU, BU) or v (AV, BV)
 ([HLW] II.2.2, (2.2)). The stage increments Z_a = Y_a - y solve, component by component,
 Z_a[i] = h Σ_j A^(i)_aj f_i(y + Z_j); full Newton with the field's Jacobian, as the implicit RK
-kernel (kernels/irk.py). Then y1[i] = y[i] + h Σ_j B^(i)_j f_i(y + Z_j) from a fresh evaluation
+kernel (templates/irk.py). Then y1[i] = y[i] + h Σ_j B^(i)_j f_i(y + Z_j) from a fresh evaluation
 at the converged stages (A may be singular, e.g. Lobatto IIIA, so d = b^T A^-1 is not used).
 An implicit RK method is the case AU = AV.
 """

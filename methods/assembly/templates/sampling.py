@@ -1,13 +1,12 @@
 """What a driver does after an accepted step (templates): its time-grid samples, its crossing.
 
-Both driver loops (the fixed-step one of methods/kernels/driver.py and the adaptive one of
-methods/kernels/adaptive.py) call these once per accepted step (s0, y0) -> (s1, y1) of size h,
-after the step modifiers and ``post_step``, so the grid and section code exists once. Each is
-generated in renamed copies with literal flags (methods/events.py ``sampling_functions``):
-``grid_rows_fixed`` / ``grid_rows_adaptive`` (partial steps of the method, ``GRID_SAMPLE``) and
-``grid_rows_dense`` (the continuous extension, ``DENSE_OUTPUT``); ``section_rows`` (Hénon's trick)
-and ``section_rows_dense`` (the extension, ``SECTION_DENSE``). The rules are those of
-:mod:`gnibench.suite.cell.timegrid` and :mod:`gnibench.suite.cell.sections`.
+Both driver loops (templates/fixed.py and templates/adaptive.py) call these once per accepted step
+(s0, y0) -> (s1, y1) of size h, after the step modifiers and ``post_step``, so the grid and section
+code exists once. The module of each output holds one copy, its flags module constants
+(methods/assembly/drivers.py): ``grid_rows`` by partial steps of the method (``grid_sample``) or by
+the continuous extension (``DENSE_OUTPUT``); ``section_rows`` by Hénon's trick or on the extension
+(``SECTION_DENSE``). The rules are those of :mod:`gnibench.suite.cell.timegrid` and
+:mod:`gnibench.suite.cell.sections`.
 
 ``e0``, ``es0``: the carried compensations of y0 and s0 under ``sum=compensated``
 (methods/summation.py; zero otherwise): samples and crossings inside the step start from
@@ -32,7 +31,7 @@ def grid_rows(y0, e0, fy0, s0, es0, y1, s1, h, last, kout, tc, dt_out, n_out, ev
     ``row`` on with the step's counters: (row, kout, nfev, njev, status, full). t_k is the step's end
     when within GRID_ULPS ulps of it (and t_k = s1 only on the horizon's ``last`` step: the final
     row is the caller's), else located by the extension (``DENSE_OUTPUT``) or by a partial step of
-    the method (``GRID_SAMPLE``; ``ws``, ``kc``: its workspace and, for odex, the lines of the
+    the method (``grid_sample``; ``ws``, ``kc``: its workspace and, for odex, the lines of the
     accepted step). ``full``: no room for all of them; the caller undoes the step and redoes it in
     the next call (the same operations)."""
     rows = out_t.shape[0]
