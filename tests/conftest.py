@@ -71,7 +71,7 @@ def _freeze_alive() -> None:
 
 def pytest_configure(config):
     """The process is frozen before the test modules are imported: gnibench's own freezing while
-    it compiles (``gnibench.suite.cell.codegen.compiling``) then leaves it as it is, also for a
+    it compiles (``gnibench.methods.assembly.loading.compiling``) then leaves it as it is, also for a
     kernel compiled at collection. The oldest generation is collected before each module only
     (third threshold 10**9; the young generations keep their thresholds); a process forked from
     a test process (a pool worker, the drawing process) inherits both, for its short life."""
