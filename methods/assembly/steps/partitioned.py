@@ -109,7 +109,8 @@ def single(which: str):
 def stormer_verlet(ctx) -> str:
     src_u, ws_u = _block(ctx, "u")
     src_v, ws_v = _block(ctx, "v")
-    return (src_u + src_v + _newton_blocks((src_u, ws_u), (src_v, ws_v)) + f"\n{INTERNAL}\ndef make_ws():\n    return ({ws_u}, {ws_v})\n"
+    return (src_u + src_v + _newton_blocks((src_u, ws_u), (src_v, ws_v))
+            + f"\n{INTERNAL}\ndef make_ws():\n    return ({ws_u}, {ws_v})\n"
             f"\n{INTERNAL}\ndef step(y, h, par, ws):\n"
             "    # [HLW] (1.17) = adjoint(h/2) o symplectic Euler(h/2)\n"
             "    y1, n1, j1, s1 = pstep_u(y, 0.5 * h, par, ws[0])\n"
@@ -129,5 +130,6 @@ def composed_step(ctx) -> str:
     (``runtime_data``)."""
     src_u, ws_u = _block(ctx, "u")
     src_v, ws_v = _block(ctx, "v")
-    return (src_u + src_v + _newton_blocks((src_u, ws_u), (src_v, ws_v)) + f"\n{INTERNAL}\ndef make_ws():\n    return ({ws_u}, {ws_v})\n"
+    return (src_u + src_v + _newton_blocks((src_u, ws_u), (src_v, ws_v))
+            + f"\n{INTERNAL}\ndef make_ws():\n    return ({ws_u}, {ws_v})\n"
             + compose(ctx.extra["data_at"]))
