@@ -20,6 +20,8 @@ import shutil
 import sys
 from pathlib import Path
 
+from gnibench.suite.foundation.files import NotRegularFile, read_regular
+
 
 def cache_root() -> Path:
     """The cache directory; a one-line UserError when it cannot be one (``GNIBENCH_CACHE_DIR``
@@ -137,8 +139,12 @@ def read_checked(path: Path, what: str, parse=None):
     if not path.exists() and not path.is_symlink():
         return None
     try:
-        raw = path.read_bytes()
-        expected = _sum_path(path).read_text().strip()
+        raw = read_regular(path)
+        expected = read_regular(_sum_path(path)).decode().strip()
+    except NotRegularFile as e:              # a FIFO, socket or directory in its place
+        warn(f"cached {what} {path.name} {e.what}; discarded and rebuilt")
+        discard(path)
+        return None
     except (OSError, UnicodeDecodeError):
         expected, raw = None, b""
     if expected != digest(raw):
@@ -206,7 +212,7 @@ def verify_numba_files(module_path: Path) -> None:
     if not files:
         return
     try:
-        listed = json.loads(_manifest(module_path).read_text())
+        listed = json.loads(read_regular(_manifest(module_path)))
         if not isinstance(listed, dict):
             raise TypeError("not a manifest")
     except (OSError, ValueError, TypeError):
@@ -224,10 +230,21 @@ def verify_numba_files(module_path: Path) -> None:
             discard(f)
 
 
+def discard_numba_files(module_path: Path) -> bool:
+    """Remove every numba cache file of a generated module and its manifest (numba recompiles on
+    the next import); True if there was any."""
+    module_path = Path(module_path)
+    files = _numba_files(module_path)
+    for f in files:
+        discard(f)
+    discard(_manifest(module_path))
+    return bool(files)
+
+
 def _file_digest(path: Path) -> str | None:
     try:
-        return digest(path.read_bytes())
-    except OSError:                       # a directory in place of a file: not what was listed
+        return digest(read_regular(path))
+    except OSError:                       # a directory or FIFO in place of a file: not listed
         return None
 
 
@@ -244,7 +261,7 @@ def record_numba_files(module_path: Path) -> None:
         return
     path = _manifest(module_path)
     try:
-        if json.loads(path.read_text()) == listed:
+        if json.loads(read_regular(path)) == listed:
             return
     except (OSError, ValueError):
         pass

@@ -53,10 +53,26 @@ def write_parquet(df, path: Path, meta: dict) -> None:
     atomic_write(path, lambda p: pq.write_table(table, p))
 
 
-def read_parquet_meta(path: Path) -> dict:
-    import pyarrow.parquet as pq
+def read_parquet(path, columns=None):
+    """A Parquet table of a results directory as a DataFrame, read from a regular file only (a
+    FIFO in its place raises at once instead of blocking: :mod:`~gnibench.suite.foundation.files`)."""
+    import pandas as pd
+    from gnibench.suite.foundation.files import open_regular_file
 
-    md = pq.read_schema(path).metadata or {}
+    with open_regular_file(path) as f:
+        return pd.read_parquet(f, columns=columns)
+
+
+def read_parquet_meta(path) -> dict:
+    """gnibench's metadata of a Parquet file (a path, regular files only, or a pyarrow buffer)."""
+    import pyarrow.parquet as pq
+    from gnibench.suite.foundation.files import open_regular_file
+
+    if isinstance(path, (str, Path)):
+        with open_regular_file(path) as f:
+            md = pq.read_schema(f).metadata or {}
+    else:
+        md = pq.read_schema(path).metadata or {}
     return json.loads(md.get(b"gnibench", b"{}"))
 
 
