@@ -14,6 +14,7 @@ from gnibench.suite.foundation.budgets import check_limits
 from gnibench.suite.foundation.errors import UserError
 from gnibench.suite.foundation.numbers import option, parse_float
 from gnibench.suite.foundation.outputs import check_output_dir, check_output_file, fault
+from gnibench.suite.foundation.status import Status
 
 
 class _Once(argparse.Action):
@@ -181,7 +182,7 @@ def _solve(a) -> int:
     from gnibench.suite.cli import streams
     from gnibench.suite.runs.progress import SolveProgress
     from gnibench.suite.runs.solving import solve_cell_spec, solve_output
-    from gnibench.suite.runs.storage import write_columns
+    from gnibench.suite.runs.writers import write_columns
 
     if a.format == "parquet" and a.output is None:
         raise UserError("--format parquet needs -o FILE (binary output is not written to stdout)")
@@ -207,9 +208,11 @@ def _solve(a) -> int:
         raise out.interrupted
     for name, why in out.skipped.items():
         print(f"gnibench: metric {name} does not apply: {why}", file=sys.stderr)
-    if out.traj.reason:
-        print(f"gnibench: {out.traj.status}: {out.traj.reason}", file=sys.stderr)
-    return 0
+    status = out.traj.status
+    if out.traj.reason or status.kind == "failure":
+        print(f"gnibench: {status}: {out.traj.reason or status.doc}", file=sys.stderr)
+    # a budget stopped the run: the output is not what was asked for (the rows so far are kept)
+    return 1 if status is Status.MAX_ROWS else 0
 
 
 def _list(a) -> int:
