@@ -184,6 +184,8 @@ def _solve(a) -> int:
     from gnibench.suite.runs.solving import solve_cell_spec, solve_output
     from gnibench.suite.runs.writers import write_columns
 
+    if a.output is not None and str(a.output) in ("-", "/dev/stdout"):
+        a.output = None                   # stdout named as a file: written to stdout
     if a.format == "parquet" and a.output is None:
         raise UserError("--format parquet needs -o FILE (binary output is not written to stdout)")
     if a.output is not None:

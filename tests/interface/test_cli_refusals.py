@@ -523,3 +523,24 @@ def test_a_run_goes_on_when_its_progress_reader_goes_away(tmp_path):
     assert p.wait(timeout=300) == 0
     assert (tmp_path / "out" / "cells.parquet").is_file()
     assert len(pd.read_parquet(tmp_path / "out" / "cells.parquet")) == 4
+
+
+@pytest.mark.parametrize("name", ["/dev/stdout", "-"])
+def test_stdout_named_as_the_output_file_is_stdout(name):
+    """``-o /dev/stdout`` (a symlink to the process's stdout, a pipe here) is stdout, as in most
+    tools (before: refused with the hint "a regular file, e.g. /proc/<pid>/fd/pipe:[...]")."""
+    done = subprocess.run([GNIBENCH, *SOLVE, "-o", name], capture_output=True, text=True,
+                          check=False)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.splitlines()[0].startswith("t,") and len(done.stdout.splitlines()) == 22
+
+
+def test_a_symlink_output_gets_a_hint_that_helps(tmp_path, capsys):
+    link = tmp_path / "link"
+    link.symlink_to("/dev/null")
+    line = one_error_line(*run([*SOLVE, "-o", str(link)], capsys)[::2])
+    assert "to write to stdout, leave out -o" in line and "/proc/" not in line
+    other = tmp_path / "other"
+    other.symlink_to(tmp_path / "real.csv")
+    line = one_error_line(*run([*SOLVE, "-o", str(other)], capsys)[::2])
+    assert f"allowed: its target, {tmp_path / 'real.csv'}" in line
