@@ -131,3 +131,14 @@ def test_an_option_varied_twice_is_refused_not_dropped():
     with pytest.raises(UserError, match=r"vary.method.h: the option 'h' of the method is varied "
                                         r"twice"):
         parse_experiment(text, "v.toml", "paper")
+
+
+def test_a_byte_order_mark_is_not_part_of_the_file(tmp_path, capsys):
+    """A UTF-8 BOM at the start (some Windows editors write one) read as "Invalid statement (at
+    line 1, column 1)"; the file is read without it."""
+    exp = tmp_path / "bom.toml"
+    exp.write_bytes(b"\xef\xbb\xbf" + ('name = "bom"\ntitle = "t"\nreference = "r"\nsteps = 4\n'
+                                       '[[cells]]\nproblems = ["kepler-2d"]\nmethods = ["rk4:h=0.1"]\n'
+                                       ).encode())
+    assert main(["run", str(exp), "-o", str(tmp_path / "out"), "-j", "1", "--no-report"]) == 0
+    assert "1 cells" in capsys.readouterr().err
