@@ -13,7 +13,6 @@ from __future__ import annotations
 import os
 import stat
 import tomllib
-from pathlib import Path
 
 from gnibench.suite.foundation.errors import UserError
 from gnibench.suite.foundation.files import read_regular
