@@ -254,6 +254,8 @@ def ready_cell(problem: Bound, method, name: str | None = None) -> CompiledCell:
     with compiling():
         try:
             cell = _warm(kind, problem, method, name)
+        except OSError:                 # a full disk, say: not a damaged cache entry
+            raise
         except Exception as e:
             # numba's cache files verified by their manifest may still fail to load (rewritten
             # together with it): discarded and compiled afresh, once; any other failure is raised

@@ -340,8 +340,11 @@ def _main(argv) -> int:
         print(f"gnibench: error: {_one_line(e)}", file=sys.stderr)
         return 1
     except OSError as e:                   # a fault of the environment no check could foresee
+        from gnibench.suite.foundation.cache import cache_fault
+
         where = f" ({e.filename})" if getattr(e, "filename", None) else ""
-        print(f"gnibench: error: {e.strerror or type(e).__name__}{where}", file=sys.stderr)
+        line = cache_fault(e) or f"{e.strerror or type(e).__name__}{where}"
+        print(f"gnibench: error: {line}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
         signals.quiet()

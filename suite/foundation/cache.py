@@ -13,6 +13,7 @@ number.
 """
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
@@ -74,8 +75,15 @@ def write_atomic(path: Path, text: str) -> None:
     """Write text to path through a process-unique temporary file and an atomic rename, so that
     concurrent writers (pytest-xdist, Dask workers) never expose a partial file."""
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_text(text)
-    _replace(tmp, path)
+    try:
+        tmp.write_text(text)
+        _replace(tmp, path)
+    except OSError as e:              # a full disk, say: the error names the file
+        if not e.filename:
+            e.filename = str(path)
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+        raise
 
 
 def _replace(tmp: Path, path: Path) -> None:
@@ -103,6 +111,26 @@ def atomic_write(path: Path, write) -> None:
     finally:
         if tmp.exists():
             tmp.unlink()
+
+
+def cache_fault(e: OSError) -> str:
+    """The line for an OSError met writing the cache (a full disk, a quota, a read-only mount):
+    which cache, what happened and what to do; "" for an error elsewhere."""
+    import errno
+
+    name = getattr(e, "filename", None)
+    root = Path(os.environ.get("GNIBENCH_CACHE_DIR") or Path.home() / ".cache" / "gnibench")
+    try:
+        inside = name is not None and Path(name).resolve().is_relative_to(root.resolve())
+    except (OSError, ValueError):
+        inside = False
+    if not inside:
+        return ""
+    full = e.errno in (errno.ENOSPC, errno.EDQUOT)
+    remedy = ("free room on its disk, or point GNIBENCH_CACHE_DIR at a disk with room" if full
+              else "make it writable, or point GNIBENCH_CACHE_DIR at a directory that is")
+    return (f"the kernel cache {root} cannot be written ({e.strerror or type(e).__name__}: "
+            f"{name}); {remedy}; nothing finished was lost, run the command again")
 
 
 def warn(message: str) -> None:

@@ -243,3 +243,34 @@ def test_open_regular_refuses_what_is_not_a_file_at_once(tmp_path):
         read_regular(tmp_path / "absent")
     (tmp_path / "f").write_bytes(b"abc")
     assert read_regular(tmp_path / "f") == b"abc"
+
+
+def test_a_full_disk_under_the_kernel_cache_names_the_cache_and_the_remedy(tmp_path):
+    """Writing a kernel module fails with ENOSPC: one line naming the cache, the file and what to
+    do, exit code 1 (before: "No space left on device" alone)."""
+    code = ("import errno, sys\n"
+            "from gnibench.suite.cell import codegen\n"
+            "def full(path, text):\n"
+            "    raise OSError(errno.ENOSPC, 'No space left on device', str(path))\n"
+            "codegen.write_atomic = full\n"
+            "from gnibench.suite.cli.main import main\n"
+            "sys.exit(main(['solve', 'kepler-2d', 'rk4:h=0.1', '--steps', '3']))\n")
+    env = {**os.environ, "GNIBENCH_CACHE_DIR": str(tmp_path / "cache")}
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
+                          check=False)
+    assert done.returncode == 1 and done.stdout == "", done.stderr
+    (line,) = done.stderr.splitlines()
+    assert line.startswith(f"gnibench: error: the kernel cache {tmp_path / 'cache'} cannot be "
+                           f"written (No space left on device: ")
+    assert "point GNIBENCH_CACHE_DIR at a disk with room" in line
+
+
+def test_an_error_outside_the_cache_is_not_blamed_on_it(tmp_path, monkeypatch):
+    import errno
+
+    from gnibench.suite.foundation.cache import cache_fault
+
+    monkeypatch.setenv("GNIBENCH_CACHE_DIR", str(tmp_path / "cache"))
+    assert cache_fault(OSError(errno.ENOSPC, "full", str(tmp_path / "out.csv"))) == ""
+    assert "cannot be written" in cache_fault(OSError(errno.ENOSPC, "full",
+                                                      str(tmp_path / "cache" / "x")))
