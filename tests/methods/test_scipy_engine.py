@@ -171,12 +171,12 @@ def test_work_precision_report_shows_the_solvers(tmp_path):
 
 
 def test_scipy_refusals_and_warnings_are_kept():
-    """A first step beyond the horizon is a UserError (solve_ivp raises a ValueError); scipy's
-    warnings (an rtol it raises to 100 eps) go to the engine's meta, not lost."""
+    """A first step beyond the horizon is a UserError (solve_ivp raises a ValueError); an rtol
+    that solve_ivp would raise to 100 eps (with a warning) is refused before any work."""
     with pytest.raises(UserError, match="first_step=100"):
         solve("kepler-2d", "scipy-rk45:first_step=100", t_end=1.0)
-    traj = solve("kepler-2d", "scipy-rk45:rtol=1e-16", t_end=1.0)
-    assert any("rtol" in w for w in traj.provenance["engine"]["warnings"])
+    with pytest.raises(UserError, match="rtol='1e-16'; allowed: 2.22045e-14 <= rtol"):
+        solve("kepler-2d", "scipy-rk45:rtol=1e-16", t_end=1.0)
 
 
 def test_ctrl_c_keeps_the_samples_so_far(monkeypatch):

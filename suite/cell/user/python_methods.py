@@ -158,6 +158,10 @@ def _field(problem):
 
     pk = problem_kernel(problem)
     base_f, par, n = pk.kernel.base_f, pk.par, problem.record.dim
+    # loaded (or compiled) now, with the setup: numba loads a cached function at its first call,
+    # and a Ctrl-C inside numba's loading is a hard exit after a grace time (cli/signals.py),
+    # which would lose the rows of the first steps
+    base_f(tuple(float(v) for v in problem.record.y0(problem.values)), par)
     count = [0]
 
     def f(t, y):
