@@ -192,3 +192,67 @@ def test_the_forgeries_would_change_global_error(cache):
     assert np.max(np.abs(y - truth)) > 1e-7               # far above rk4's 1e-9 error here
     assert "flow" in reference_checks.problem_ok(pb, t, y)
     assert reference_checks.problem_ok(pb, t, truth) == ""
+
+
+FIFO_TARGETS = ["kernel module", "numba data (.nbc)", "numba index (.nbi)", "kernel manifest",
+                "problem code", "its checksum", "reference (.npz)"]
+
+
+def _cache_file(cache: Path, which: str) -> tuple[Path, list[str]]:
+    """The cache file ``which`` of the warmed cache, and the solve that reads it."""
+    module = next(p for p in (cache / "kernels").glob("cell_*.py"))
+    pycache = cache / "kernels" / "__pycache__"
+    code = next((cache / "problems").glob("kepler-2d-*.code.json"))
+    path = {"kernel module": module,
+            "numba data (.nbc)": next(pycache.glob(f"{module.stem}.integrate-*.nbc")),
+            "numba index (.nbi)": next(pycache.glob(f"{module.stem}.integrate-*.nbi")),
+            "kernel manifest": pycache / f"{module.stem}.manifest.json",
+            "problem code": code, "its checksum": code.with_name(code.name + ".sha256"),
+            "reference (.npz)": next((cache / "references").glob("kepler-2d-heyoka-*.npz")),
+            }[which]
+    return path, HEYOKA if "reference" in which else SOLVE
+
+
+@pytest.mark.parametrize("which", FIFO_TARGETS)
+def test_a_cache_file_replaced_by_a_fifo_never_blocks(cache, which):
+    """A FIFO in place of a cache file blocked every command that used it, for ever (issue 43):
+    every cache file is opened without blocking and read only when it is a regular file
+    (suite/foundation/files.py); the FIFO is removed with one warning line and rebuilt. (The
+    timeout only turns a hang into a failure.)"""
+    cache, out = cache
+    path, args = _cache_file(cache, which)
+    assert path.is_file()
+    path.unlink()
+    os.mkfifo(path)
+    try:
+        again = subprocess.run(GNIBENCH + list(args), capture_output=True, text=True, timeout=300,
+                               env={**os.environ, "GNIBENCH_CACHE_DIR": str(cache)})
+    except subprocess.TimeoutExpired:
+        pytest.fail(f"a FIFO as the {which} blocked the command")
+    assert again.returncode == 0 and "Traceback" not in again.stderr, again.stderr
+    assert again.stdout == out["heyoka" if args is HEYOKA else "plain"]
+    warnings = [ln for ln in again.stderr.splitlines() if ln.startswith("gnibench: warning:")]
+    assert len(warnings) == 1, again.stderr
+    assert not path.exists() or path.is_file()
+    third = _solve(cache, args)
+    assert third.returncode == 0 and third.stderr == "", third.stderr
+
+
+def test_a_flipped_numba_file_with_its_manifest_recomputed_is_rebuilt(cache):
+    """A forger who flips bytes of a numba data file and recomputes the manifest gets past the
+    checksum; numba's load then failed with a 61-line traceback at every command (issue 43).
+    What does not load is discarded with one warning line and compiled again."""
+    import json
+
+    cache, out = cache
+    path, _ = _cache_file(cache, "numba data (.nbc)")
+    raw = bytearray(path.read_bytes())
+    for i in (len(raw) // 3, len(raw) // 2, len(raw) // 2 + 7):
+        raw[i] ^= 0xFF
+    path.write_bytes(bytes(raw))
+    manifest = path.parent / f"{path.name.split('.')[0]}.manifest.json"
+    listed = json.loads(manifest.read_text())
+    listed[path.name] = hashlib.sha256(bytes(raw)).hexdigest()
+    manifest.write_text(json.dumps(listed, sort_keys=True))
+    warning = _heals(cache, out["plain"], "compiled kernel")
+    assert "does not load" in warning
