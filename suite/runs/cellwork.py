@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from gnibench.suite.foundation.status import Status
+from gnibench.suite.foundation.usercode import Guard, guarded
 
 REPORT_SECONDS = 0.5          # at most two progress reports a second per cell
 
@@ -63,15 +64,17 @@ def run_cell(cell, report: Callable[[int, float], None] | None = None,
     report = report or _reporter
     progress = _throttled(cell.id, report) if report is not None else None
     try:
-        with np.errstate(all="ignore"):     # overflow in a diverging cell is a status, not noise
+        with np.errstate(all="ignore"), guarded() as guard:  # a diverging cell: a status
             traj = solve_cell(cell.spec, progress=progress)
             metrics, skipped = apply(traj, cell.spec.metrics, problem=cell.spec.problem,
                                      families=False)
             samples = cell_samples(cell, traj, metrics) if frames else \
                 cell_sample_columns(traj, metrics)
             row = cell_row(cell, traj, metrics, skipped=skipped)
-    except Exception as e:  # noqa: BLE001 - any failure of one cell is recorded, the run goes on
-        reason = f"{type(e).__name__}: {e}".replace("\n", " ")
+    except BaseException as e:   # any failure of one cell is recorded, the run goes on; even
+        if guard.real(e):        # SystemExit (foundation/usercode.py), but not a real Ctrl-C
+            raise
+        reason = Guard.reason(e)
         return CellOutcome(cell, str(Status.ERROR), reason, None,
                            cell_row(cell, None, None, str(Status.ERROR), reason),
                            timing_row(cell, None, str(Status.ERROR)))
@@ -89,7 +92,7 @@ def with_frame(outcome: CellOutcome) -> CellOutcome:
     try:
         outcome.samples = cell_frame(outcome.cell, outcome.samples)
     except Exception as e:  # noqa: BLE001 - as run_cell records it
-        reason = f"{type(e).__name__}: {e}".replace("\n", " ")
+        reason = Guard.reason(e)
         cell = outcome.cell
         return CellOutcome(cell, str(Status.ERROR), reason, None,
                            cell_row(cell, None, None, str(Status.ERROR), reason),

@@ -324,3 +324,48 @@ order = 4
     with pytest.raises(UserError, match=r"^method tj4-of-sv \(a composition of stormer-verlet\): "
                                         r"it needs a partitioned system"):
         solve("euler-so4", "tj4-of-sv:h=0.01", steps=2)
+
+
+PLUGIN = '''
+import sys
+
+def mixed():
+    return [{"id": "ep-osc", "states": ["q", "p"], "hamiltonian": "p^2/2 + q^2/2",
+             "initial": {"q": 1, "p": 0}}, 42]
+
+def exits():
+    sys.exit(7)
+'''
+
+
+@pytest.mark.parametrize("attr, says", [
+    ("mixed", "entry point gnibench.problems:plug: element 2 of its list is int (42)"),
+    ("exits", "entry point gnibench.problems:plug (gn_plugin:exits) cannot be loaded: "
+              "SystemExit: sys.exit(7)"),
+])
+def test_an_entry_point_names_its_bad_element_and_may_not_exit(tmp_path, monkeypatch, attr,
+                                                                 says):
+    """An entry point returning a list with one bad element named the list, not the element;
+    one calling sys.exit() ended the command (issue 43)."""
+    import importlib.metadata
+
+    (tmp_path / "gn_plugin.py").write_text(PLUGIN)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    point = importlib.metadata.EntryPoint("plug", f"gn_plugin:{attr}", "gnibench.problems")
+    monkeypatch.setattr(importlib.metadata, "entry_points",
+                        lambda group=None: [point] if group == "gnibench.problems" else [])
+    with pytest.raises(UserError) as e:
+        loader._load_entry_point("gnibench.problems", "plug")
+    assert str(e.value).startswith(says), str(e.value)
+    assert "ep-osc" not in loader.loaded().get("gnibench.problems:plug", [])
+
+
+def test_a_definitions_file_with_a_byte_order_mark_is_read(tmp_path):
+    """A TOML file saved with a UTF-8 byte-order mark (Windows editors) read 'Invalid statement
+    (at line 1, column 1)'; the mark is not part of the text (issue 43)."""
+    path = tmp_path / "bom.toml"
+    path.write_bytes("\ufeff".encode() + OSC.replace('"osc"', '"bom-osc"').encode())
+    try:
+        assert loader.load(path) == ["bom-osc"]
+    finally:
+        loader.unload(path)
