@@ -146,10 +146,14 @@ def check_budgets(problem: Bound, method, steps, t_end, every, section, dt_out=N
         check_integer(section, "--section")
         check_output(section, columns, what)
         return
-    spacing = None if external or transformed else effective_dt_out(method, dt_out)
+    rate = 1.0                # d(time of the grid)/d(integration variable), at most
+    if transformed:           # K-S: the grid is in t, the horizon in s (Transform.time_rate)
+        tr = problem.record.transform
+        rate = tr.time_rate(problem.values) if tr.time is not None and tr.time_rate else None
+    spacing = None if external or rate is None else effective_dt_out(method, dt_out)
     t_final = t_end if t_end is not None else (nsteps - 1) * h + h_last
     if spacing is not None and not adaptive or spacing is not None and t_end is not None:
-        check_output(t_final / spacing / every + 2, columns, what)
+        check_output(t_final * rate / spacing / every + 2, columns, what)
     elif not adaptive:
         check_output(nsteps / every + 2, columns, what)
 
