@@ -2,8 +2,8 @@
 
 One row per method, one column per error (an integral, or ``global``). Each entry shows the seed's
 text (``O(th)``) and what the tables give: the growth exponent in t (``growth_exponent_<X>``, the
-median over the row's cells: CLAIMS.md "growth exponent in t") and the exponent in h
-(``order_<X>``, fitted across the row's cells, which differ only in h: CLAIMS.md "exponent in h"),
+median over the row's cells: the claims inventory "growth exponent in t") and the exponent in h
+(``order_<X>``, fitted across the row's cells, which differ only in h: the claims inventory "exponent in h"),
 as ``t^a h^b``. When every cell's max |err| is below the figure's ``zero_below``, the entry reads
 ``0`` with that maximum (round-off: [HLW] Table 2.1's exact conservation of L).
 """
@@ -107,7 +107,7 @@ def draw_table(results, figure: dict):
             cell.set_text_props(fontweight="bold")
             cell.set_facecolor("#EEEEEE")
         elif c == 0:
-            key = method_key(figure["table"]["rows"][r - 1]["method"])
+            key = method_key(results.cell_row(figure["table"]["rows"][r - 1]["cells"][0]))
             cell.set_text_props(color=color_of(key), fontweight="bold")
     manifest = [{"title": "", "xlabel": "", "ylabel": "", "table": data,
                  "curves": [{"label": row["label"], "cells": row["cells"],

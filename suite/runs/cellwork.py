@@ -14,7 +14,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from gnibench.suite.foundation.status import Status
-from gnibench.suite.foundation.usercode import Guard, guarded
 
 REPORT_SECONDS = 0.5          # at most two progress reports a second per cell
 
@@ -57,24 +56,22 @@ def run_cell(cell, report: Callable[[int, float], None] | None = None,
     """Solve one cell (its typed cell, ``cell.spec``, as it is), apply its metrics, and build its
     rows. ``frames=False``: the samples are left as columns (a dict of arrays; a pool worker
     builds no DataFrame and never imports pandas), made a table by :func:`with_frame`."""
-    from gnibench.suite.cell.solve import solve_cell
+    from gnibench.suite.cell.driver import integrate
     from gnibench.suite.metrics.compute import apply
     from gnibench.suite.runs.tables import cell_row, cell_sample_columns, cell_samples, timing_row
 
     report = report or _reporter
     progress = _throttled(cell.id, report) if report is not None else None
     try:
-        with np.errstate(all="ignore"), guarded() as guard:  # a diverging cell: a status
-            traj = solve_cell(cell.spec, progress=progress)
+        with np.errstate(all="ignore"):     # overflow in a diverging cell is a status, not noise
+            traj = integrate(cell.spec, progress=progress)
             metrics, skipped = apply(traj, cell.spec.metrics, problem=cell.spec.problem,
                                      families=False)
             samples = cell_samples(cell, traj, metrics) if frames else \
                 cell_sample_columns(traj, metrics)
             row = cell_row(cell, traj, metrics, skipped=skipped)
-    except BaseException as e:   # any failure of one cell is recorded, the run goes on; even
-        if guard.real(e):        # SystemExit (foundation/usercode.py), but not a real Ctrl-C
-            raise
-        reason = Guard.reason(e)
+    except Exception as e:  # noqa: BLE001 - any failure of one cell is recorded, the run goes on
+        reason = f"{type(e).__name__}: {e}".replace("\n", " ")
         return CellOutcome(cell, str(Status.ERROR), reason, None,
                            cell_row(cell, None, None, str(Status.ERROR), reason),
                            timing_row(cell, None, str(Status.ERROR)))
@@ -92,7 +89,7 @@ def with_frame(outcome: CellOutcome) -> CellOutcome:
     try:
         outcome.samples = cell_frame(outcome.cell, outcome.samples)
     except Exception as e:  # noqa: BLE001 - as run_cell records it
-        reason = Guard.reason(e)
+        reason = f"{type(e).__name__}: {e}".replace("\n", " ")
         cell = outcome.cell
         return CellOutcome(cell, str(Status.ERROR), reason, None,
                            cell_row(cell, None, None, str(Status.ERROR), reason),

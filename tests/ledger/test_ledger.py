@@ -45,7 +45,7 @@ def test_the_ledger_covers_the_inventory_exactly():
     assert not missing and not extra, f"missing {missing}, not in the inventory {extra}"
     orphans = [i for i in corrected if i.removesuffix(".corrected") not in inventory]
     assert not orphans, f"corrected entries without their printed claim: {orphans}"
-    assert corrected, "the policy on slips: at least the slips of CLAIMS.md Part 4 are corrected"
+    assert corrected, "the policy on slips: at least the slips of the claims inventory Part 4 are corrected"
 
 
 @pytest.mark.parametrize("text,ok", [
@@ -123,7 +123,7 @@ def test_energy_recurrence_matches_euler_runs():
         f = sample_frame(t, out)
         f.insert(0, "cell", i)
         frames.append(f)
-        rows.append({"cell": i, "problem": t.problem, "method": t.method})
+        rows.append({"cell": i, "problem": t.problem, "problem_id": p, "method": t.method})
     got = closed_forms.euler_oscillator_energy(pd.DataFrame(rows), pd.concat(frames))
     assert got["deviation"] <= 1e-12
     # a wrong step size in the recurrence is caught
