@@ -121,3 +121,28 @@ def test_claim_value_at_is_checked():
               'passes = "a > 0"\n')
     with pytest.raises(UserError, match=r"claim B-9-a: values.a: bad at = 'steps=1e999'"):
         parse_claims(f"[[claim]]\n{body}", "x.toml")
+
+
+SECTION_HEAD = 'name = "s"\ntitle = "s"\nreference = "none"\nt_end = 50.0\n'
+SECTION_GROUP = '[[cells]]\nproblems = ["henon-heiles"]\nmethods = ["rk4:h=0.1"]\n'
+
+
+@pytest.mark.parametrize("text, refused", [
+    (SECTION_HEAD + "section = 2\nevery = 3\n" + SECTION_GROUP, True),
+    (SECTION_HEAD + SECTION_GROUP + "section = 2\nevery = 3\n", True),
+    (SECTION_HEAD + "section = 2\n" + SECTION_GROUP + "every = 3\n", True),
+    (SECTION_HEAD + "every = 3\n" + SECTION_GROUP + "section = 2\n", False),   # top's default
+    (SECTION_HEAD + SECTION_GROUP + "section = 2\nevery = 1\n", False),
+])
+def test_every_beside_a_section_is_refused(text, refused):
+    """A section cell writes every crossing: an ``every`` beside its ``section`` was dropped
+    without a word (``gnibench solve --every 3 --section 2`` is refused); a top-level every is the
+    default of the other groups, left aside by a group with its own section."""
+    from gnibench.suite.runs.experiment import parse_experiment
+
+    if refused:
+        with pytest.raises(UserError, match="section and every = 3 both given"):
+            parse_experiment(text, "s.toml")
+    else:
+        cells = parse_experiment(text, "s.toml").cells
+        assert len(cells) == 1 and cells[0].section == 2
