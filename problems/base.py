@@ -75,9 +75,6 @@ class Transform:
     to the original time and state, so every metric of the original problem applies unchanged.
     ``time`` names the transformed system's state component that is the original time (K-S: t,
     with the fictitious time s as independent variable): a time grid (``dt_out``) is laid in it.
-    ``time_rate(values)`` bounds d(time)/ds along the orbit from the initial point (K-S: the
-    apocentre distance), so that the rows of a time grid are counted against the budgets before
-    any work (None: they are not known in advance, only the run's own budget stops them).
     """
 
     option: str
@@ -86,7 +83,6 @@ class Transform:
     back: Callable
     doc: str = ""
     time: str | None = None
-    time_rate: Callable | None = None
 
 
 @dataclass(frozen=True)

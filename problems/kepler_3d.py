@@ -72,21 +72,9 @@ def _from_ks(Z, values):
     return kepler_ks.backward(Z)
 
 
-def _time_rate(values) -> float:
-    """dt/ds = |u|^2 = r ([B] (5.4)) is at most the apocentre distance a (1 + e) of the orbit
-    (a = -mu / (2 H), e^2 = 1 + 2 H |q x p|^2 / mu^2)."""
-    y = np.asarray(PROBLEM.y0(values), dtype=float)
-    q, p, mu = y[:3], y[3:], values["mu"]
-    energy = 0.5 * p @ p - mu / math.sqrt(q @ q)
-    c = np.cross(q, p)
-    a = -mu / (2 * energy)
-    e = math.sqrt(max(0.0, 1 + 2 * energy * (c @ c) / mu ** 2))
-    return a * (1 + e)
-
-
 KS = Transform(option="ks", problem=kepler_ks.PROBLEM, to_transformed=_to_ks, back=_from_ks,
                doc="K-S regularization [B] (5.4): integrate in fictitious time s (h, --t-end in s)",
-               time="t", time_rate=_time_rate)
+               time="t")
 
 
 class Kepler3D(Problem):

@@ -36,19 +36,6 @@ def row_budget(dim: int) -> int:
     return max(2, min(limit("GNIBENCH_MAX_ROWS"), limit("GNIBENCH_MAX_OUTPUT_MB") * 2 ** 20 // per_row))
 
 
-def budget_reason(rows: int, t: float, dim: int) -> str:
-    """The reason of a run stopped by its output budget (status ``max_rows``, at ``rows`` rows
-    and time ``t``; the budget that binds of :func:`row_budget`'s two)."""
-    from gnibench.suite.foundation.budgets import limit
-
-    rows_limit, mb = limit("GNIBENCH_MAX_ROWS"), limit("GNIBENCH_MAX_OUTPUT_MB")
-    by_rows = rows_limit <= mb * 2 ** 20 // (8 * (1 + dim + COUNTERS))
-    which = (f"GNIBENCH_MAX_ROWS={rows_limit} rows" if by_rows else
-             f"GNIBENCH_MAX_OUTPUT_MB={mb} MB of samples")
-    return (f"stopped at t = {t:.17g} after {rows} output rows: the output budget "
-            f"({which}) is spent; sample less often (--every, --dt-out) or raise the limit")
-
-
 class Buffers:
     """Output buffers of a compiled driver: the rows written so far, and views with room left."""
 

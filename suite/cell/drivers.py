@@ -30,7 +30,7 @@ from gnibench.methods.kernels.slots import (
     STATE,
     Y_ROWS,
 )
-from gnibench.suite.cell.calls import COUNTERS, Buffers, Progress, budget_reason, run_driver
+from gnibench.suite.cell.calls import COUNTERS, Buffers, Progress, run_driver
 from gnibench.suite.cell.codegen import compiling, record_compiled
 from gnibench.suite.cell.compiled import CompiledCell, compile_cell, problem_kernel
 from gnibench.suite.cell.trajectory import Trajectory
@@ -136,9 +136,6 @@ class Driver:
                    wall: float) -> Trajectory:
         """The samples of a run with the cell's provenance (``meta``: horizon and sampling)."""
         t, y, c = buffers.arrays()
-        if status is Status.MAX_ROWS and not reason:
-            reason = budget_reason(len(t), float(t[-1]) if len(t) else 0.0,
-                                   self.problem.record.dim)
         cell = self.cell
         prov = {"versions": versions(), **meta, "seed": None, "y0": list(cell.y0),
                 "H0": list(cell.H0), "wall_seconds": wall,

@@ -62,14 +62,27 @@ def read_parquet_meta(path: Path) -> dict:
 
 def write_columns(columns: dict, meta: dict, fmt: str, out: Path | None, stdout) -> None:
     """:func:`write_frame` of the table of one cell given as its columns (name -> 1-D array,
-    :func:`gnibench.suite.runs.tables.sample_columns`), written in chunks of rows so that the
-    memory it takes does not grow with the rows (:mod:`gnibench.suite.runs.writers`): csv and
-    json from the arrays, the same text as pandas writes, without importing pandas (0.27 s of
-    the 0.7 s of a small ``gnibench solve``); columns this does not cover (text, booleans, names
-    that csv would quote) go through DataFrames of the chunks."""
-    from gnibench.suite.runs.writers import write_table
+    :func:`gnibench.suite.runs.tables.sample_columns`): csv and json are written from the arrays,
+    the same text as pandas writes, without importing pandas (0.27 s of the 0.7 s of a small
+    ``gnibench solve``); Parquet, and columns this does not cover (text, booleans, names that
+    csv would quote), go through the DataFrame."""
+    import numpy as np
 
-    write_table(columns, meta, fmt, out, stdout)
+    if fmt == "parquet" or not _plain(columns):
+        from gnibench.suite.runs.tables import frame_of
+
+        write_frame(frame_of(columns), meta, fmt, out, stdout)
+        return
+    if fmt == "csv":
+        text = _csv_text(columns)
+    else:
+        numbers = {c: [x if math.isfinite(x) else None
+                       for x in np.asarray(v, dtype=float).tolist()] for c, v in columns.items()}
+        text = json.dumps({"meta": meta, "columns": numbers}, default=str) + "\n"
+    if out is None:
+        stdout.write(text)
+    else:
+        atomic_write(out, lambda p: Path(p).write_text(text))
 
 
 def _plain(columns: dict) -> bool:

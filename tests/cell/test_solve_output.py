@@ -6,7 +6,6 @@ and on columns of edge values."""
 from __future__ import annotations
 
 import io
-import json
 import subprocess
 import sys
 
@@ -73,58 +72,3 @@ def test_solve_command_does_not_import_pandas():
     assert proc.stderr.strip().splitlines()[-1] == "0 False"
     assert proc.stdout.splitlines()[0].startswith("t,p1,p2,q1,q2,err_H")
     assert len(proc.stdout.splitlines()) == 6
-
-
-@pytest.mark.parametrize("chunk", [1, 7, 1000])
-def test_tables_written_in_chunks_are_the_same(monkeypatch, tmp_path, chunk):
-    """The writers stream the table CHUNK rows at a time (issue 43: ``solve`` built its whole
-    text in memory): the text is the same at every chunk size, and so is the Parquet table."""
-    import pandas as pd
-    from gnibench.suite.runs import writers
-    from gnibench.suite.runs.storage import read_parquet_meta
-
-    out = solve_output(solve_cell_spec("kepler-2d", "rk4:h=0.01", steps=300, every=7))
-    odd = {**out.columns, "flag": out.columns["t"] > 1.0}            # not plain: pandas' csv
-    monkeypatch.setattr(writers, "CHUNK", chunk)
-    for columns in (out.columns, odd):
-        for fmt in ("csv", "json"):
-            fast, slow = _both(columns, out.meta, fmt)
-            assert fast == slow, (fmt, chunk)
-        path = tmp_path / f"t{len(columns)}.parquet"
-        write_columns(columns, out.meta, "parquet", path, None)
-        pd.testing.assert_frame_equal(pd.read_parquet(path), frame_of(dict(columns)))
-        assert read_parquet_meta(path) == json.loads(json.dumps(out.meta, default=str))
-
-
-def test_an_empty_table_is_written_with_its_header(tmp_path):
-    columns = {"t": np.empty(0), "q": np.empty(0), "steps": np.empty(0)}
-    for fmt in ("csv", "json"):
-        fast, slow = _both(columns, {}, fmt)
-        assert fast == slow, fmt
-    write_columns(columns, {}, "parquet", tmp_path / "e.parquet", None)
-    import pandas as pd
-
-    assert list(pd.read_parquet(tmp_path / "e.parquet").columns) == ["t", "q", "steps"]
-
-
-def _peak_kb(rows: int, fmt: str, tmp_path) -> int:
-    """Peak resident memory (KB) of ``gnibench solve`` writing ``rows`` rows."""
-    code = ("import resource, sys\nfrom gnibench.suite.cli.main import main\n"
-            f"args = ['solve', 'kepler-2d', 'rk4:h=0.001', '--steps', '{rows}', '--format', "
-            f"'{fmt}', '--reference', 'none']\n"
-            f"args += ['-o', r'{tmp_path / 'o'}.{fmt}']\n"
-            "assert main(args) == 0\n"
-            "print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, file=sys.stderr)\n")
-    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                          check=True)
-    return int(proc.stderr.strip().splitlines()[-1])
-
-
-@pytest.mark.parametrize("fmt", ["csv", "json", "parquet"])
-def test_the_memory_of_writing_does_not_grow_with_the_text(fmt, tmp_path):
-    """200 000 more rows cost the memory of their values (t, 4 states, 4 integrals and their
-    errors, the counters: ~150 bytes a row with the integration's buffers), not of their text:
-    csv took ~2.2 KB a row, json ~1.5 KB (issue 43). Memory, not time: deterministic."""
-    small, large = (_peak_kb(n, fmt, tmp_path) for n in (100_000, 300_000))
-    per_row = (large - small) * 1024 / 200_000
-    assert per_row < 700, per_row
