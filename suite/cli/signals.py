@@ -43,8 +43,6 @@ import sys
 import threading
 import time
 
-from gnibench.suite.foundation.usercode import note_signal
-
 GRACE = 1.0                 # seconds the main thread has to raise a signal before a hard exit
 POLL = 0.02                 # how often the watchdog looks while a signal is pending
 SIGNALS = (signal.SIGINT, signal.SIGTERM)
@@ -89,7 +87,6 @@ def _unsafe(frame) -> bool:
 
 def _handler(signum, frame):
     now = time.monotonic()
-    note_signal()                   # a real interrupt, not user code's (foundation/usercode.py)
     with _state.lock:
         _state.received = signum
         if _unsafe(frame):
@@ -99,9 +96,6 @@ def _handler(signum, frame):
         _state.pending, _state.origin = None, None
         _state.raised_at = now
     raise KeyboardInterrupt
-
-
-_handler.counts_signals = True
 
 
 def _unraisable(unraisable) -> None:

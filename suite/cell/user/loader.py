@@ -136,7 +136,6 @@ def _stale(name: str) -> bool:
 
     from gnibench.methods import METHODS
     from gnibench.suite.cell.user.python_methods import entry_code
-    from gnibench.suite.foundation.usercode import UserCodeFailed, run_user_code
 
     for kind, rid in _LOADED.get(name, ("", []))[1]:
         record = METHODS.get(rid) if kind == "method" else None
@@ -145,9 +144,9 @@ def _stale(name: str) -> bool:
         code = json.loads(record.definition or "{}").get("code")
         base = str(Path(name).parent)
         try:
-            if run_user_code(entry_code, record.entry, base)[1] != code:
+            if entry_code(record.entry, base)[1] != code:
                 return True
-        except UserCodeFailed:      # the module is broken now: build again, and say so
+        except Exception:  # noqa: BLE001 - the module is broken now: build again, and say so
             return True
     return False
 
@@ -178,41 +177,26 @@ def _load_text(origin: Origin, text: str) -> list[str]:
 def _load_entry_point(group: str, name: str) -> list[str]:
     from importlib.metadata import entry_points
 
-    from gnibench.suite.foundation.usercode import UserCodeFailed, run_user_code
-
     origin = Origin("entry-point", f"{group}:{name}", group)
     if origin.name in _LOADED:
         return [rid for _, rid in _LOADED[origin.name][1]]
     found = [ep for ep in entry_points(group=group) if ep.name == name]
     if not found:
         raise UserError(f"no entry point {name!r} in the group {group}")
-    try:                            # the plugin's code: sys.exit() there is a failure too
-        obj = run_user_code(found[0].load)
-        obj = run_user_code(obj) if callable(obj) else obj
-    except UserCodeFailed as e:     # a broken plugin: one line naming it
+    try:
+        obj = found[0].load()
+        obj = obj() if callable(obj) else obj
+    except Exception as e:  # noqa: BLE001 - a broken plugin: one line naming it
         raise UserError(f"entry point {origin.name} ({found[0].value}) cannot be loaded: "
-                        f"{e}") from None
+                        f"{type(e).__name__}: {e}") from None
     items = obj if isinstance(obj, list) else [obj]
-    bad = next((k for k, t in enumerate(items, 1) if not isinstance(t, dict)), None)
-    if bad is not None:
-        what = (f"element {bad} of its list is {type(items[bad - 1]).__name__} "
-                f"({_short(items[bad - 1])})" if isinstance(obj, list)
-                else f"it gives {type(obj).__name__}")
-        raise UserError(f"entry point {origin.name}: {what}; allowed: a definition table "
-                        f"(dict), a list of them, or a function returning either")
+    if not all(isinstance(t, dict) for t in items):
+        raise UserError(f"entry point {origin.name} gives {type(obj).__name__}; allowed: a "
+                        f"definition table (dict), a list of them, or a function returning either")
     kind = GROUPS[group]
     tables = [Entry(f"entry point {origin.name}", kind, k, {"id": name, **t})
               for k, t in enumerate(items, 1)]
     return _register(origin, "", tables)
-
-
-def _short(value) -> str:
-    """A value in at most 60 characters of one line (for an error message)."""
-    try:
-        text = " ".join(repr(value).split())
-    except Exception:  # noqa: BLE001 - a repr that fails is the user's
-        text = f"a {type(value).__name__}"
-    return text if len(text) <= 60 else text[:57] + "..."
 
 
 def _register(origin: Origin, digest: str, tables: list[Entry]) -> list[str]:

@@ -332,14 +332,13 @@ def _list(e: Entry, key: str) -> list:
 def _python(e: Entry, kind: str, info: dict, definition: dict) -> Method:
     from gnibench.methods.external import DT_OUT
     from gnibench.suite.cell.user.python_methods import PythonMethod, entry_code, solver, stepper
-    from gnibench.suite.foundation.usercode import UserCodeFailed, run_user_code
 
     entry = e.text("entry")
     base = str(Path(e.source).resolve().parent) if Path(e.source).is_file() else ""
-    try:                     # the user's module runs: sys.exit() there is a failure too
-        _, code = run_user_code(entry_code, entry, base)
-    except UserCodeFailed as ex:
-        raise e.error("entry", f"cannot load {entry!r}: {ex}") from None
+    try:
+        _, code = entry_code(entry, base)
+    except Exception as ex:  # noqa: BLE001 - any failure to import the user's code
+        raise e.error("entry", f"cannot load {entry!r}: {type(ex).__name__}: {ex}") from None
     definition["code"] = code                   # the module's source: part of a cell's key
     if kind == "python":
         return PythonMethod(family="python", generate=_not_compiled, params=(H_PARAM,),

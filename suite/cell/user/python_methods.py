@@ -32,7 +32,6 @@ import numpy as np
 from gnibench.methods.engines.base import EngineRun
 from gnibench.methods.external import ExternalMethod
 from gnibench.suite.foundation.errors import UserError
-from gnibench.suite.foundation.usercode import guarded
 
 #: (entry, base) -> (function, module, (mtime, size) of its file, digest of its source)
 _ENTRIES: dict[tuple[str, str], tuple] = {}
@@ -158,18 +157,8 @@ def _field(problem):
     return f, count
 
 
-def _real(value) -> np.ndarray:
-    """``value`` as an array of floats; a ValueError for complex values (their imaginary part
-    would be dropped without a word), text, booleans or dates."""
-    a = np.asarray(value)
-    if a.dtype.kind not in "fiuO":
-        what = "complex values" if a.dtype.kind == "c" else f"values of type {a.dtype}"
-        raise ValueError(f"returned {what}; expected real numbers")
-    return np.asarray(a, dtype=float)
-
-
 def _state(value, n: int) -> np.ndarray:
-    y = _real(value)
+    y = np.asarray(value, dtype=float)
     if y.shape != (n,):
         raise ValueError(f"returned shape {y.shape}; expected ({n},)")
     return y
@@ -200,18 +189,12 @@ def stepper(entry: str, base: str, code: str = ""):
     problem's compiled module, passed by the driver to every engine; unused here)."""
 
     def run(problem, values, grid, kernel=None) -> EngineRun:
-        with guarded() as guard:
-            return _steps(problem, grid, guard)
-
-    def _steps(problem, grid, guard) -> EngineRun:
         t0 = time.perf_counter()
         n = problem.record.dim
         try:
             step = _current(entry, base, code)
-        except BaseException as e:  # the user's module (sys.exit at import too): a status
-            if guard.real(e):
-                raise
-            return _failed(n, problem, f"{entry}: {guard.reason(e)}")
+        except Exception as e:  # noqa: BLE001 - the user's module: a status, not a crash
+            return _failed(n, problem, f"{entry}: {type(e).__name__}: {e}")
         f, count = _field(problem)
         marks = grid.step
         rows = len(marks)
@@ -219,24 +202,22 @@ def stepper(entry: str, base: str, code: str = ""):
         out, nfev = np.empty((rows, n)), np.zeros(rows)
         out[0] = y
         setup = time.perf_counter() - t0
-        status, reason, done, k, i = "ok", "", 1, 1, 0
+        status, reason, done, k = "ok", "", 1, 1
         t1 = time.perf_counter()
-        try:        # whatever the step raises is a status; Ctrl-C keeps the samples so far
-            for i in range(1, grid.nsteps + 1):
-                h = grid.h if i < grid.nsteps else grid.h_last
+        for i in range(1, grid.nsteps + 1):
+            h = grid.h if i < grid.nsteps else grid.h_last
+            try:
                 y = _state(step(f, (i - 1) * grid.h, y.copy(), h), n)
-                if not np.all(np.isfinite(y)):
-                    status, reason = "nonfinite", f"state overflowed or became NaN at step {i}"
-                    break
-                if k < rows and marks[k] == i:
-                    out[k], nfev[k] = y, count[0]
-                    k += 1
-                    done = k
-        except BaseException as e:
-            if guard.real(e):
-                status, reason = "interrupted", f"interrupted by the user at step {i}"
-            else:
-                status, reason = "error", f"{entry} at step {i}: {guard.reason(e)}"
+            except Exception as e:  # noqa: BLE001 - the user's code: a status, not a crash
+                status, reason = "error", f"{entry} at step {i}: {type(e).__name__}: {e}"
+                break
+            if not np.all(np.isfinite(y)):
+                status, reason = "nonfinite", f"state overflowed or became NaN at step {i}"
+                break
+            if k < rows and marks[k] == i:
+                out[k], nfev[k] = y, count[0]
+                k += 1
+                done = k
         seconds = time.perf_counter() - t1
         info = {"engine": "python", "entry": entry, "steps": "calls of the step function",
                 "nfev": "calls of f"}
@@ -251,18 +232,12 @@ def solver(entry: str, base: str, code: str = ""):
     """``run(problem, values, grid, kernel) -> EngineRun`` of a ``python-solver`` method."""
 
     def run(problem, values, grid, kernel=None) -> EngineRun:
-        with guarded() as guard:
-            return _solve(problem, values, grid, guard)
-
-    def _solve(problem, values, grid, guard) -> EngineRun:
         t0 = time.perf_counter()
         n = problem.record.dim
         try:
             solve = _current(entry, base, code)
-        except BaseException as e:  # the user's module (sys.exit at import too): a status
-            if guard.real(e):
-                raise
-            return _failed(n, problem, f"{entry}: {guard.reason(e)}")
+        except Exception as e:  # noqa: BLE001 - the user's module: a status, not a crash
+            return _failed(n, problem, f"{entry}: {type(e).__name__}: {e}")
         f, count = _field(problem)
         t_eval = np.array(grid.t, dtype=float)
         y0 = np.array(problem.record.y0(problem.values), dtype=float)
@@ -277,14 +252,12 @@ def solver(entry: str, base: str, code: str = ""):
                 reason = "" if status == "ok" else str(result.get("message", ""))
                 steps, reported = _count(result, "steps"), _count(result, "nfev")
                 result = result["y"]
-            y = _real(result)
+            y = np.asarray(result, dtype=float)
             if y.ndim != 2 or y.shape[1] != n or len(y) > len(t_eval):
                 raise ValueError(f"returned samples of shape {y.shape}; expected "
                                  f"({len(t_eval)}, {n})")
-        except BaseException as e:  # whatever the solver raises is a status
-            y = np.empty((0, n))
-            status, reason = ("interrupted", "interrupted by the user") if guard.real(e) else \
-                ("error", f"{entry}: {guard.reason(e)}")
+        except Exception as e:  # noqa: BLE001 - the user's code: a status, not a crash
+            y, status, reason = np.empty((0, n)), "error", f"{entry}: {type(e).__name__}: {e}"
         seconds = time.perf_counter() - t1
         bad = ~np.all(np.isfinite(y), axis=1)
         if bad.any():
@@ -292,8 +265,7 @@ def solver(entry: str, base: str, code: str = ""):
             reason = reason or "the solver returned non-finite samples"
         elif len(y) < len(t_eval) and status == "ok":
             status, reason = "error", f"the solver returned {len(y)} of {len(t_eval)} samples"
-        if status not in ("ok", "nonfinite", "error", "max_steps", "step_too_small",
-                          "interrupted"):
+        if status not in ("ok", "nonfinite", "error", "max_steps", "step_too_small"):
             status, reason = "error", f"{entry} returned status {status!r}: {reason}"
         if not len(y):                  # nothing usable: the initial point, as a failed call
             y = y0[None, :]
