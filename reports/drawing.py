@@ -48,19 +48,16 @@ class Job:
 
 def _digest_file(path: Path) -> str | None:
     from gnibench.suite.foundation.cache import digest
-    from gnibench.suite.foundation.files import read_regular
 
     try:
-        return digest(read_regular(path))
+        return digest(path.read_bytes())
     except OSError:
         return None
 
 
 def _read_manifest(d: Path) -> dict:
-    from gnibench.suite.foundation.files import read_regular
-
-    try:                                  # never blocks: a FIFO there is no manifest
-        doc = json.loads(read_regular(d / MANIFEST))
+    try:
+        doc = json.loads((d / MANIFEST).read_text(encoding="utf-8"))
     except (OSError, ValueError):
         return {}
     return doc if isinstance(doc, dict) else {}

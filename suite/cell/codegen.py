@@ -41,7 +41,6 @@ from gnibench.suite.foundation.cache import (
     warn,
     write_atomic,
 )
-from gnibench.suite.foundation.files import read_regular
 from gnibench.suite.foundation.status import kernel_constants
 from gnibench.suite.foundation.inline import inline_source
 from gnibench.suite.foundation.numba_typing import install as install_typing_memo
@@ -227,8 +226,8 @@ def _import(text: str, prefix: str):
     datastack.install()           # no frame-stack chunk mapped and unmapped per call (datastack.py)
     path = _module_path(key, prefix)
     if path.exists():
-        try:                        # never blocks: a FIFO there is a damaged entry
-            stored = read_regular(path).decode()
+        try:
+            stored = path.read_text()
         except (OSError, UnicodeDecodeError):
             stored = None
         if stored is None or not _intact(stored):

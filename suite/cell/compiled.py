@@ -15,7 +15,6 @@ from types import ModuleType
 
 import numpy as np
 from gnibench.suite.cell.codegen import load, load_problem
-from gnibench.suite.foundation.cache import load_healing
 from gnibench.suite.foundation.params import Bound
 
 
@@ -57,8 +56,8 @@ class ProblemKernel:
         """I_k at every row of y, shape (rows, q)."""
         y = np.ascontiguousarray(y, dtype=np.float64)
         out = np.empty((len(y), len(self.integral_names)))
-        if len(y) and self.integral_names:     # (a damaged numba cache file: compiled again)
-            load_healing(lambda: self.kernel.eval_invariants(y, self.par, len(y), out))
+        if len(y) and self.integral_names:
+            self.kernel.eval_invariants(y, self.par, len(y), out)
         return out
 
     def at(self, y) -> tuple[float, ...]:

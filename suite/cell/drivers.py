@@ -34,7 +34,6 @@ from gnibench.suite.cell.calls import COUNTERS, Buffers, Progress, run_driver
 from gnibench.suite.cell.codegen import compiling, record_compiled
 from gnibench.suite.cell.compiled import CompiledCell, compile_cell, problem_kernel
 from gnibench.suite.cell.trajectory import Trajectory
-from gnibench.suite.foundation.cache import load_healing
 from gnibench.suite.foundation.params import Bound
 from gnibench.suite.foundation.provenance import versions
 from gnibench.suite.foundation.status import Status
@@ -253,15 +252,10 @@ def ready_cell(problem: Bound, method, name: str | None = None) -> CompiledCell:
     name = name or kind.names["dense" if method.base.values.get("dt_out", 0.0) > 0.0
                               and kind is AdaptiveDriver else "samples"]
     t0 = time.perf_counter()
-
-    def ready() -> CompiledCell:
+    with compiling():
         cell = compile_cell(problem, method)
         if name not in cell.warm:
             kind.scratch(problem, method, name, cell).warm_up()
             cell.warm.add(name)
             record_compiled(cell.kernel, cell.problem_kernel)
-        return cell
-
-    with compiling():               # what does not load from numba's cache is compiled again
-        cell = load_healing(ready)
     return replace(cell, compile_seconds=time.perf_counter() - t0)

@@ -58,9 +58,7 @@ def runs(storage: Path, machine: str | None = None) -> list[tuple[str, Path]]:
 
 def load_run(path: Path) -> dict:
     """One saved run (JSON); a file that is not a run raises TypeError (ValueError: not JSON)."""
-    from gnibench.suite.foundation.files import read_regular
-
-    doc = json.loads(read_regular(path, follow=True))
+    doc = json.loads(Path(path).read_text(encoding="utf-8"))
     if not isinstance(doc, dict) or not isinstance(doc.get("benchmarks"), list):
         raise TypeError(f"{path} is not a benchmark run (no 'benchmarks' list)")
     return doc

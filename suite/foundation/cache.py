@@ -20,8 +20,6 @@ import shutil
 import sys
 from pathlib import Path
 
-from gnibench.suite.foundation.files import NotRegular, is_regular, read_regular
-
 
 def cache_root() -> Path:
     """The cache directory; a one-line UserError when it cannot be one (``GNIBENCH_CACHE_DIR``
@@ -139,13 +137,8 @@ def read_checked(path: Path, what: str, parse=None):
     if not path.exists() and not path.is_symlink():
         return None
     try:
-        raw = read_regular(path)
-        expected = read_regular(_sum_path(path)).decode().strip()
-    except NotRegular as e:               # a FIFO in its place would block the read for ever
-        warn(f"cached {what} {path.name} is not what gnibench wrote ({Path(e.filename).name}: "
-             f"{e.strerror}); discarded and rebuilt")
-        discard(path)
-        return None
+        raw = path.read_bytes()
+        expected = _sum_path(path).read_text().strip()
     except (OSError, UnicodeDecodeError):
         expected, raw = None, b""
     if expected != digest(raw):
@@ -209,12 +202,11 @@ def verify_numba_files(module_path: Path) -> None:
         if d.is_symlink() or d.exists() and not d.is_dir():
             warn(f"cache entry {d} is not a directory; removed")
             discard(d)
-    _drop_irregular(module_path)
     files = _numba_files(module_path)
     if not files:
         return
     try:
-        listed = json.loads(read_regular(_manifest(module_path)))
+        listed = json.loads(_manifest(module_path).read_text())
         if not isinstance(listed, dict):
             raise TypeError("not a manifest")
     except (OSError, ValueError, TypeError):
@@ -232,23 +224,10 @@ def verify_numba_files(module_path: Path) -> None:
             discard(f)
 
 
-def _drop_irregular(module_path: Path) -> None:
-    """Remove, with one warning line, whatever is not a regular file among the module's files in
-    ``__pycache__`` (Python's ``.pyc``, numba's index and data, the manifest): a FIFO there
-    would block Python's or numba's read of it for ever (they open it as a file)."""
-    for d in dict.fromkeys((module_path.parent / "__pycache__", numba_cache_path(module_path))):
-        if not d.is_dir():
-            continue
-        for f in d.glob(f"{module_path.stem}.*"):
-            if not is_regular(f):
-                warn(f"cache entry {f} is not a regular file; removed")
-                discard(f)
-
-
 def _file_digest(path: Path) -> str | None:
     try:
-        return digest(read_regular(path))
-    except OSError:                       # not a regular file: not what was listed
+        return digest(path.read_bytes())
+    except OSError:                       # a directory in place of a file: not what was listed
         return None
 
 
@@ -265,53 +244,9 @@ def record_numba_files(module_path: Path) -> None:
         return
     path = _manifest(module_path)
     try:
-        if json.loads(read_regular(path)) == listed:
+        if json.loads(path.read_text()) == listed:
             return
     except (OSError, ValueError):
         pass
     path.parent.mkdir(exist_ok=True)      # numba's files may be under NUMBA_CACHE_DIR
     write_atomic(path, json.dumps(listed, sort_keys=True))
-
-
-def load_healing(call):
-    """``call()``, which may load compiled functions from numba's disk cache; when numba fails to
-    load one (a data file damaged in a way its checksum cannot see: rewritten together with the
-    manifest), the cache files of that function's module are discarded with one warning line and
-    ``call()`` runs once more (numba compiles). Any other failure is raised as it is."""
-    try:
-        return call()
-    except Exception as e:
-        module = _unloadable(e)
-        if module is None:
-            raise
-        warn(f"compiled kernel {module.stem} does not load from numba's cache "
-             f"({type(e).__name__}); its cache files are discarded and it is compiled again")
-        for f in _numba_files(module):
-            discard(f)
-        discard(_manifest(module))
-    return call()
-
-
-def _unloadable(error: BaseException) -> Path | None:
-    """The generated module whose function numba failed to load from its cache when ``error``
-    was raised (a frame of ``numba.core.caching`` in the traceback; the function is the dispatcher
-    of the innermost compile, by its public ``py_func``), or None."""
-    tb, in_cache, module = error.__traceback__, False, None
-    while tb is not None:
-        frame = tb.tb_frame
-        name = frame.f_globals.get("__name__", "")
-        if name == "numba.core.caching":
-            in_cache = True
-        elif name == "numba.core.dispatcher":
-            func = getattr(frame.f_locals.get("self"), "py_func", None)
-            path = getattr(getattr(func, "__code__", None), "co_filename", None)
-            if path:
-                module = Path(path)
-        tb = tb.tb_next
-    if not in_cache or module is None or not module.is_file():
-        return None
-    try:
-        module.relative_to(cache_root())          # only gnibench's own generated modules
-    except ValueError:
-        return None
-    return module

@@ -20,11 +20,20 @@ import stat
 from pathlib import Path
 
 from gnibench.suite.foundation.errors import UserError
-from gnibench.suite.foundation.files import kind
 
 
 class Fault(Exception):
     """A fault of the environment during work (disk full, I/O error): one line, exit code 1."""
+
+
+def kind(mode: int) -> str:
+    """What a file of this mode is, in words ("a FIFO")."""
+    for test, name in ((stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+                       (stat.S_ISFIFO, "a FIFO"), (stat.S_ISSOCK, "a socket"),
+                       (stat.S_ISDIR, "a directory")):
+        if test(mode):
+            return name
+    return "not a regular file"
 
 
 def probe(directory: Path, what: str, name: str = "gnibench-probe") -> None:

@@ -13,9 +13,9 @@ from __future__ import annotations
 import os
 import stat
 import tomllib
+from pathlib import Path
 
 from gnibench.suite.foundation.errors import UserError
-from gnibench.suite.foundation.files import NotRegular, read_regular
 
 MAX_CHARS = 4_000_000
 MAX_NESTING = 24          # brackets of arrays and inline tables, counted in the text
@@ -62,7 +62,7 @@ def read_text_file(path, what: str) -> str:
     regular file (or a symlink to one) of at most 4 x :data:`MAX_CHARS` bytes, else one
     UserError line before anything is read: a FIFO would block the read for ever, /dev/zero never
     end it, a directory fail it."""
-    from gnibench.suite.foundation.files import kind
+    from gnibench.suite.foundation.outputs import kind
 
     name = str(path)
     try:
@@ -78,11 +78,8 @@ def read_text_file(path, what: str) -> str:
         raise UserError(f"{what} {name!r} is {info.st_size} bytes; allowed: a TOML file of at "
                         f"most {MAX_CHARS} characters")
     try:
-        raw = read_regular(path, follow=True, limit=4 * MAX_CHARS)
-        # a byte-order mark (Windows editors write one) is not part of the TOML text
-        return raw.decode("utf-8").removeprefix("\ufeff")
-    except NotRegular as e:           # it changed since the look above
-        raise UserError(f"bad {what} {name!r}: {e.strerror}; allowed: a regular file") from None
+        raw = Path(path).read_bytes()
+        return raw.decode("utf-8")
     except UnicodeDecodeError as e:
         raise UserError(f"{what} {name!r} is not UTF-8 text (byte {e.start}); allowed: a TOML "
                         f"file in UTF-8") from None

@@ -31,7 +31,6 @@ from typing import Self
 
 from gnibench.suite.foundation.cache import discard, warn
 from gnibench.suite.foundation.errors import UserError
-from gnibench.suite.foundation.files import open_binary
 from gnibench.suite.foundation.provenance import versions
 
 #: what the numbers of a cell depend on (folders and files of the package, relative to its root)
@@ -212,12 +211,10 @@ class Store:
         from gnibench.suite.runs.storage import read_parquet_meta
 
         try:
-            with open_binary(path) as f:    # a regular file, or NotRegular: never a blocking open
-                meta = read_parquet_meta(f)
-                if meta.get("key") != key or meta.get("part_format") != PART_FORMAT:
-                    raise ValueError("it is not the part of this cell")
-                f.seek(0)
-                samples = pd.read_parquet(f) if meta["has_samples"] else None
+            meta = read_parquet_meta(path)
+            if meta.get("key") != key or meta.get("part_format") != PART_FORMAT:
+                raise ValueError("it is not the part of this cell")
+            samples = pd.read_parquet(path) if meta["has_samples"] else None
             stored = meta.pop("checksum", None)
             if stored != content_checksum(meta, samples):
                 warn(f"stored cell {path.relative_to(self.out)} does not match its checksum "
@@ -227,8 +224,7 @@ class Store:
             return Part(samples, _restore(meta["row"]), _restore(meta["timing"]),
                         tuple(meta["state_names"]))
         except Exception as e:  # noqa: BLE001 - a damaged part is recomputed, whatever the damage
-            why = (e.strerror if isinstance(e, OSError) and e.strerror else
-                   " ".join(str(e).split())[:120] or type(e).__name__)
+            why = " ".join(str(e).split())[:120] or type(e).__name__
             warn(f"stored cell {path.relative_to(self.out)} cannot be read ({why}); discarded "
                  f"and recomputed")
             discard(path)

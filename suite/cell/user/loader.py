@@ -26,7 +26,6 @@ from pathlib import Path
 
 from gnibench.suite.cell.user.entries import Entry
 from gnibench.suite.foundation.errors import UserError
-from gnibench.suite.foundation.files import read_regular
 
 GROUPS = {"gnibench.problems": "problem", "gnibench.methods": "method"}
 ENV = "GNIBENCH_LOAD"
@@ -122,7 +121,7 @@ def refresh() -> None:
     ``solve`` and ``run``: a notebook sees its edited definitions, as a new command would)."""
     for name in [n for n, (digest, _) in _LOADED.items() if digest]:
         try:
-            text = read_regular(name, follow=True).decode("utf-8").removeprefix("\ufeff")
+            text = Path(name).read_text(encoding="utf-8")
         except (OSError, UnicodeDecodeError):
             continue                                 # gone or unreadable: keep what was loaded
         if hashlib.sha256(text.encode()).hexdigest() != _LOADED[name][0] or _stale(name):

@@ -141,12 +141,8 @@ def _field(problem):
     """f(t, y) -> ndarray from the problem's compiled field, and its call counter."""
     from gnibench.suite.cell.compiled import problem_kernel
 
-    from gnibench.suite.foundation.cache import load_healing
-
     pk = problem_kernel(problem)
     base_f, par, n = pk.kernel.base_f, pk.par, problem.record.dim
-    y0 = tuple(float(v) for v in problem.record.y0(problem.values))
-    load_healing(lambda: base_f(y0, par))   # loaded (or compiled) here, not in the user's step
     count = [0]
 
     def f(t, y):
