@@ -35,15 +35,17 @@ from gnibench.suite.foundation import datastack, numba_passes
 from gnibench.suite.foundation.cache import (
     cache_dir,
     discard,
+    discard_numba_files,
     numba_cache_path,
     record_numba_files,
     verify_numba_files,
     warn,
     write_atomic,
 )
-from gnibench.suite.foundation.status import kernel_constants
+from gnibench.suite.foundation.files import NotRegularFile, read_regular
 from gnibench.suite.foundation.inline import inline_source
 from gnibench.suite.foundation.numba_typing import install as install_typing_memo
+from gnibench.suite.foundation.status import kernel_constants
 from gnibench.suite.foundation.templates import Context, store_source, template, tuple_helpers
 
 
@@ -226,13 +228,16 @@ def _import(text: str, prefix: str):
     datastack.install()           # no frame-stack chunk mapped and unmapped per call (datastack.py)
     path = _module_path(key, prefix)
     if path.exists():
+        damaged = "is corrupt or was modified (its checksum does not match)"
         try:
-            stored = path.read_text()
+            if _intact(read_regular(path).decode()):
+                damaged = ""
+        except NotRegularFile as e:                    # a FIFO in its place, say
+            damaged = e.what
         except (OSError, UnicodeDecodeError):
-            stored = None
-        if stored is None or not _intact(stored):
-            warn(f"cached kernel module {path.name} is corrupt or was modified (its checksum does "
-                 f"not match); discarded and rebuilt")
+            pass
+        if damaged:
+            warn(f"cached kernel module {path.name} {damaged}; discarded and rebuilt")
             discard(path)
             for f in path.parent.glob(f"__pycache__/{path.stem}.*"):
                 discard(f)
@@ -349,6 +354,22 @@ _recorded: dict[str, int] = {}
 def _misses(kernel) -> int:
     return sum(sum(f.stats.cache_misses.values()) for f in vars(kernel).values()
                if hasattr(f, "stats") and hasattr(f.stats, "cache_misses"))
+
+
+def forget(*kernels) -> bool:
+    """Drop generated modules whose numba cache files failed to load (a ``.nbc`` damaged in a
+    way its manifest does not show, e.g. rewritten together with the manifest): their numba cache
+    files are removed and the next :func:`load_module` of the same text imports and compiles them
+    afresh. True if any of them had cache files."""
+    had = False
+    for kernel in kernels:
+        for key, loaded in list(_loaded.items()):
+            if loaded is kernel:
+                del _loaded[key]
+        sys.modules.pop(kernel.__name__, None)
+        _recorded.pop(kernel.__file__, None)
+        had |= discard_numba_files(Path(kernel.__file__))
+    return had
 
 
 def record_compiled(*kernels) -> None:

@@ -77,6 +77,21 @@ def problem_kernel(problem: Bound) -> ProblemKernel:
 _cells: dict[tuple[str, str], CompiledCell] = {}
 
 
+def forget_damaged(problem: Bound, method) -> bool:
+    """After loading or warming up a cell failed: forget its two generated modules and remove
+    their numba cache files (:func:`~gnibench.suite.cell.codegen.forget`), so that the next
+    :func:`compile_cell` compiles them afresh. True if there were cache files to blame; False
+    means the failure did not come from the cache."""
+    from gnibench.suite.cell.codegen import forget
+
+    kernel, _, _ = load(problem, method)
+    pk, _ = load_problem(problem)
+    for key, cell in list(_cells.items()):
+        if {cell.kernel, cell.problem_kernel} & {kernel, pk}:
+            del _cells[key]
+    return forget(kernel, pk)
+
+
 def compile_cell(problem: Bound, method) -> CompiledCell:
     """Load the cell's kernels and build ``par``. A cell loaded once in this process is kept (keyed
     by its canonical specs, which fix its module text and ``par``, and by the definitions of user

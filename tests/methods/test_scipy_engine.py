@@ -205,3 +205,17 @@ def test_ctrl_c_keeps_the_samples_so_far(monkeypatch):
     part = e.value.partial
     assert part.status is Status.INTERRUPTED and 10 < len(part.t) and part.t[-1] < 10 * PERIOD
     assert np.all(np.isfinite(part.y)) and part.nfev[-1] < 300
+
+
+@pytest.mark.parametrize("name", SOLVERS)
+def test_a_tolerance_scipy_would_raise_is_refused(name):
+    """solve_ivp raises rtol below 100 eps to 100 eps with a warning: the table would record a
+    tolerance never used (scipy-radau:rtol=1e-30 was ``ok`` with rtol=1e-30 in its spec)."""
+    eps100 = float(100 * np.finfo(float).eps)
+    with pytest.raises(UserError, match=rf"scipy-{name}: bad value rtol='1e-30'; allowed: "):
+        prepare("harmonic-oscillator", f"scipy-{name}:rtol=1e-30")
+    with pytest.raises(UserError):
+        prepare("harmonic-oscillator", f"scipy-{name}:rtol={eps100 * 0.999!r}")
+    traj = solve("harmonic-oscillator", f"scipy-{name}:rtol={eps100!r},atol=1e-12", t_end=0.01)
+    assert traj.status is Status.OK and "warnings" not in traj.provenance["engine"], \
+        traj.provenance["engine"].get("warnings")

@@ -146,3 +146,24 @@ def test_every_beside_a_section_is_refused(text, refused):
     else:
         cells = parse_experiment(text, "s.toml").cells
         assert len(cells) == 1 and cells[0].section == 2
+
+
+def test_an_option_varied_twice_is_refused_not_dropped():
+    """vary.h and vary.method.h name the same option: before, one list silently won (one cell of
+    h = 0.3 instead of the product)."""
+    text = ('name = "v"\ntitle = "t"\nreference = "r"\nsteps = 10\n[[cells]]\n'
+            'problems = ["kepler-2d"]\nmethods = ["rk4"]\nvary.h = [0.1, 0.2]\nvary.method.h = [0.3]\n')
+    with pytest.raises(UserError, match=r"vary.method.h: the option 'h' of the method is varied "
+                                        r"twice"):
+        parse_experiment(text, "v.toml", "paper")
+
+
+def test_a_byte_order_mark_is_not_part_of_the_file(tmp_path, capsys):
+    """A UTF-8 BOM at the start (some Windows editors write one) read as "Invalid statement (at
+    line 1, column 1)"; the file is read without it."""
+    exp = tmp_path / "bom.toml"
+    exp.write_bytes(b"\xef\xbb\xbf" + ('name = "bom"\ntitle = "t"\nreference = "r"\nsteps = 4\n'
+                                       '[[cells]]\nproblems = ["kepler-2d"]\nmethods = ["rk4:h=0.1"]\n'
+                                       ).encode())
+    assert main(["run", str(exp), "-o", str(tmp_path / "out"), "-j", "1", "--no-report"]) == 0
+    assert "1 cells" in capsys.readouterr().err
