@@ -236,6 +236,7 @@ def verify_numba_files(module_path: Path) -> None:
         if d.is_symlink() or d.exists() and not d.is_dir():
             warn(f"cache entry {d} is not a directory; removed")
             discard(d)
+    _drop_irregular(module_path)
     files = _numba_files(module_path)
     if not files:
         return
@@ -255,6 +256,20 @@ def verify_numba_files(module_path: Path) -> None:
         return
     for f in files:
         if f.name not in listed:
+            discard(f)
+
+
+def _drop_irregular(module_path: Path) -> None:
+    """Remove, with one warning line, whatever is not a regular file among the module's files in
+    its ``__pycache__`` (Python's ``.pyc`` too, which Python's import reads without our opener:
+    a FIFO there blocked the import for ever) and numba's cache directory."""
+    for d in dict.fromkeys((module_path.parent / "__pycache__", numba_cache_path(module_path))):
+        if not d.is_dir():
+            continue
+        for f in d.glob(f"{module_path.stem}.*"):
+            if not f.is_symlink() and f.is_file():
+                continue
+            warn(f"cache entry {f} is not a regular file; removed")
             discard(f)
 
 

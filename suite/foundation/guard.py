@@ -12,12 +12,18 @@ cells are unharmed.
 A KeyboardInterrupt is a real interrupt (Ctrl-C, or SIGTERM, which gnibench's commands raise as
 KeyboardInterrupt) when a signal came while the code ran: the command line's handlers count the
 signals they receive (:func:`signal_received`). Where no gnibench handler watches the signals
-(the Python API in a notebook, say) a KeyboardInterrupt cannot be told from Ctrl-C and is taken
-for one.
+(the Python API, a notebook) and Python's own SIGINT handler is in place, :func:`user_code`
+installs for its duration one that counts and then does what Python's does, so that there too
+a step's own KeyboardInterrupt is its error and Ctrl-C stops. Where SIGINT is ignored or not
+delivered (any thread but the main one: a Dask worker's task, a thread of the user's) no
+KeyboardInterrupt is a signal's; under a handler of someone else's, every one is taken for
+Ctrl-C (it cannot be told apart).
 """
 from __future__ import annotations
 
 import contextlib
+import signal
+import threading
 
 
 class UserCodeError(Exception):
@@ -53,14 +59,40 @@ def user_code(what):
     it raises becomes :class:`UserCodeError` naming ``what``; a real interrupt of the process is
     raised as it came."""
     before = _signals[0]
+    with _counted() as counted:
+        try:
+            yield
+        except KeyboardInterrupt as e:
+            if not counted or _signals[0] != before:
+                raise                           # Ctrl-C or SIGTERM: the command stops
+            raise UserCodeError(f"{_name(what)}: {_describe(e)} raised by the code itself"
+                                ) from None
+        except (Exception, SystemExit, GeneratorExit) as e:  # noqa: BLE001 - the user's code
+            raise UserCodeError(f"{_name(what)}: {_describe(e)}") from None
+
+
+def _interrupt(signum, frame):
+    """Python's SIGINT handler, counting the signal first (:func:`user_code` in the API)."""
+    signal_received()
+    signal.default_int_handler(signum, frame)
+
+
+@contextlib.contextmanager
+def _counted():
+    """Whether the signals that could raise KeyboardInterrupt here are counted (see the module
+    docstring); installs :func:`_interrupt` for the block in place of Python's own handler."""
+    if _watched[0] or threading.current_thread() is not threading.main_thread():
+        yield True
+        return
+    handler = signal.getsignal(signal.SIGINT)
+    if handler is not signal.default_int_handler:
+        yield handler in (_interrupt, signal.SIG_IGN, signal.SIG_DFL)
+        return
+    signal.signal(signal.SIGINT, _interrupt)
     try:
-        yield
-    except KeyboardInterrupt as e:
-        if not _watched[0] or _signals[0] != before:
-            raise                               # Ctrl-C or SIGTERM: the command stops
-        raise UserCodeError(f"{_name(what)}: {_describe(e)} raised by the code itself") from None
-    except (Exception, SystemExit, GeneratorExit) as e:  # noqa: BLE001 - the user's code
-        raise UserCodeError(f"{_name(what)}: {_describe(e)}") from None
+        yield True
+    finally:
+        signal.signal(signal.SIGINT, handler)
 
 
 def _name(what) -> str:

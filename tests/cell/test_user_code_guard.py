@@ -37,9 +37,10 @@ def complex_values(f, t, y, h):
     return y + 1j * h
 
 def slow_euler(f, t, y, h):
-    open("started", "a").close()
+    y = y + h * f(t, y)         # f loaded (or compiled) before the test signals: a signal that
+    open("started", "a").close()    # comes while numba loads waits for it, at most GRACE
     time.sleep(0.02)
-    return y + h * f(t, y)
+    return y
 
 def solver_exits(f, y0, t_span, t_eval, rtol, atol):
     sys.exit(4)
@@ -152,3 +153,71 @@ def test_a_bad_entry_point_is_one_line_naming_what_is_wrong(monkeypatch, obj, me
                         else [])
     with pytest.raises(UserError, match=message.replace("(", r"\(").replace(")", r"\)")):
         loader._load_entry_point("gnibench.methods", "bad")
+
+
+API_STEPS = '''
+import os
+import signal
+
+def own_interrupt(f, t, y, h):
+    if t > 0.015:
+        raise KeyboardInterrupt
+    return y + h * f(t, y)
+
+def ctrl_c(f, t, y, h):
+    if t > 0.015:
+        os.kill(os.getpid(), signal.SIGINT)      # a real Ctrl-C, delivered in this step
+    return y + h * f(t, y)
+'''
+
+
+@pytest.fixture
+def api_steps(tmp_path):
+    """Two Python steps loaded in this process, and Python's own SIGINT handler (as in a
+    notebook or a script; a test process may have another)."""
+    import gnibench
+    from gnibench.suite.cell.user import loader
+
+    (tmp_path / "api_guard_steps.py").write_text(API_STEPS)
+    defs = tmp_path / "api_defs.toml"
+    defs.write_text("".join(f'[[method]]\nid = "api-{n}"\nkind = "python"\n'
+                            f'entry = "api_guard_steps:{n.replace("-", "_")}"\n'
+                            for n in ("own-interrupt", "ctrl-c")))
+    gnibench.load(defs)
+    saved = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        yield gnibench
+    finally:
+        signal.signal(signal.SIGINT, saved)
+        loader.unload(defs)
+
+
+def test_in_the_api_a_steps_own_keyboard_interrupt_is_its_error(api_steps):
+    """Without gnibench's command-line handlers (the Python API) a KeyboardInterrupt raised by a
+    step was taken for Ctrl-C; Python's handler is watched while user code runs, so it is the
+    cell's error, and Python's handler is back afterwards."""
+    traj = api_steps.solve("kepler-2d", "api-own-interrupt:h=0.01", steps=5)
+    assert traj.status == "error" and "KeyboardInterrupt raised by the code itself" in traj.reason
+    assert len(traj.samples) == 3                          # t = 0, 0.01, 0.02: then the step
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+def test_in_the_api_a_real_ctrl_c_in_a_step_stops_with_the_rows_so_far(api_steps):
+    with pytest.raises(KeyboardInterrupt) as e:
+        api_steps.solve("kepler-2d", "api-ctrl-c:h=0.01", steps=5)
+    part = getattr(e.value, "partial", None)
+    assert part is not None and len(part.t) == 3 and str(part.status) == "interrupted"
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+def test_in_a_thread_a_keyboard_interrupt_is_the_steps_error(api_steps):
+    """A signal is handled in the main thread only: a KeyboardInterrupt in another thread (a Dask
+    worker's task, a user's thread) is the step's own."""
+    import threading
+
+    out = {}
+    thread = threading.Thread(target=lambda: out.setdefault(
+        "traj", api_steps.solve("kepler-2d", "api-own-interrupt:h=0.01", steps=5)))
+    thread.start()
+    thread.join(timeout=600)
+    assert out["traj"].status == "error", out["traj"].reason

@@ -8,6 +8,7 @@ the test's own run), damages the entry, runs again and compares the output with 
 """
 from __future__ import annotations
 
+import importlib.util
 import json
 import os
 import re
@@ -196,17 +197,19 @@ def _entries(cache: Path) -> dict[str, Path]:
             "numba index": min(pycache.glob(f"{stem}.integrate-*.nbi")),
             "kernel manifest": pycache / f"{stem}.manifest.json",
             "problem code": next((cache / "problems").glob("kepler-2d-*.code.json")),
-            "problem code checksum": next((cache / "problems").glob("kepler-2d-*.code.json.sha256"))}
+            "problem code checksum": next((cache / "problems").glob("kepler-2d-*.code.json.sha256")),
+            # Python reads the module's bytecode itself (written or not: PYTHONDONTWRITEBYTECODE)
+            "kernel bytecode": Path(importlib.util.cache_from_source(str(_cell_module(cache))))}
 
 
 @pytest.mark.parametrize("entry", ["kernel module", "numba file", "numba index", "kernel manifest",
-                                   "problem code", "problem code checksum"])
+                                   "problem code", "problem code checksum", "kernel bytecode"])
 def test_a_fifo_in_place_of_a_cache_entry_is_replaced_not_waited_on(warm, entry):
     """A FIFO where a cache file should be: opening it would wait for a writer forever. The run
     finishes (a timeout fails the test), with the same output, the entry rebuilt."""
     cache, expected = warm
     path = _entries(cache)[entry]
-    path.unlink()
+    path.unlink(missing_ok=True)
     os.mkfifo(path)
     env = {**os.environ, "GNIBENCH_CACHE_DIR": str(cache)}
     again = subprocess.run(GNIBENCH + SOLVE, capture_output=True, text=True, check=False,

@@ -123,6 +123,31 @@ def test_claim_value_at_is_checked():
         parse_claims(f"[[claim]]\n{body}", "x.toml")
 
 
+SECTION_HEAD = 'name = "s"\ntitle = "s"\nreference = "none"\nt_end = 50.0\n'
+SECTION_GROUP = '[[cells]]\nproblems = ["henon-heiles"]\nmethods = ["rk4:h=0.1"]\n'
+
+
+@pytest.mark.parametrize("text, refused", [
+    (SECTION_HEAD + "section = 2\nevery = 3\n" + SECTION_GROUP, True),
+    (SECTION_HEAD + SECTION_GROUP + "section = 2\nevery = 3\n", True),
+    (SECTION_HEAD + "section = 2\n" + SECTION_GROUP + "every = 3\n", True),
+    (SECTION_HEAD + "every = 3\n" + SECTION_GROUP + "section = 2\n", False),   # top's default
+    (SECTION_HEAD + SECTION_GROUP + "section = 2\nevery = 1\n", False),
+])
+def test_every_beside_a_section_is_refused(text, refused):
+    """A section cell writes every crossing: an ``every`` beside its ``section`` was dropped
+    without a word (``gnibench solve --every 3 --section 2`` is refused); a top-level every is the
+    default of the other groups, left aside by a group with its own section."""
+    from gnibench.suite.runs.experiment import parse_experiment
+
+    if refused:
+        with pytest.raises(UserError, match="section and every = 3 both given"):
+            parse_experiment(text, "s.toml")
+    else:
+        cells = parse_experiment(text, "s.toml").cells
+        assert len(cells) == 1 and cells[0].section == 2
+
+
 def test_an_option_varied_twice_is_refused_not_dropped():
     """vary.h and vary.method.h name the same option: before, one list silently won (one cell of
     h = 0.3 instead of the product)."""
