@@ -250,7 +250,7 @@ def test_the_measured_durations_name_test_modules():
     """tests/durations.json (written by ``pytest --store-durations``; the modules are handed to
     the workers longest first, tests/conftest.py) holds a duration >= 0 for test modules that
     exist, and for most of them: a module renamed or removed, or a stale file, fails here."""
-    from conftest import read_durations
+    from support_order import read_durations
 
     durations = read_durations()
     modules = {p.relative_to(ROOT / "tests").as_posix() for p in (ROOT / "tests").rglob("test_*.py")}
@@ -265,7 +265,7 @@ def test_the_measured_durations_name_test_modules():
 def test_modules_are_handed_out_longest_first():
     """The order of the modules: measured durations, longest first; an unmeasured module at the
     median; ties in collection order."""
-    from conftest import longest_first
+    from support_order import longest_first
 
     durations = {"a.py": 5.0, "b.py": 50.0, "c.py": 1.0, "d.py": 20.0}
     assert longest_first(["a.py", "b.py", "c.py", "d.py", "new.py", "e.py"], durations) == [
