@@ -271,3 +271,16 @@ def test_modules_are_handed_out_longest_first():
     assert longest_first(["a.py", "b.py", "c.py", "d.py", "new.py", "e.py"], durations) == [
         "b.py", "d.py", "new.py", "e.py", "a.py", "c.py"]           # median 12.5
     assert longest_first(["x.py", "y.py"], {}) == ["x.py", "y.py"]
+
+
+def test_test_modules_have_unique_basenames():
+    """The test folders are not packages (pytest's rootdir-relative ``prepend`` import), so two
+    test modules with one basename, in tests/ or benchmarks/, clash at collection."""
+    seen: dict[str, str] = {}
+    for folder in ("tests", "benchmarks"):
+        for path in sorted((ROOT / folder).rglob("*.py")):
+            if path.name in ("conftest.py", "__init__.py"):
+                continue
+            rel = path.relative_to(ROOT).as_posix()
+            assert path.name not in seen, f"{rel} and {seen[path.name]} share a basename"
+            seen[path.name] = rel
