@@ -250,7 +250,7 @@ def test_the_measured_durations_name_test_modules():
     """tests/durations.json (written by ``pytest --store-durations``; the modules are handed to
     the workers longest first, tests/conftest.py) holds a duration >= 0 for test modules that
     exist, and for most of them: a module renamed or removed, or a stale file, fails here."""
-    from conftest import read_durations
+    from support_order import read_durations
 
     durations = read_durations()
     modules = {p.relative_to(ROOT / "tests").as_posix() for p in (ROOT / "tests").rglob("test_*.py")}
@@ -265,9 +265,22 @@ def test_the_measured_durations_name_test_modules():
 def test_modules_are_handed_out_longest_first():
     """The order of the modules: measured durations, longest first; an unmeasured module at the
     median; ties in collection order."""
-    from conftest import longest_first
+    from support_order import longest_first
 
     durations = {"a.py": 5.0, "b.py": 50.0, "c.py": 1.0, "d.py": 20.0}
     assert longest_first(["a.py", "b.py", "c.py", "d.py", "new.py", "e.py"], durations) == [
         "b.py", "d.py", "new.py", "e.py", "a.py", "c.py"]           # median 12.5
     assert longest_first(["x.py", "y.py"], {}) == ["x.py", "y.py"]
+
+
+def test_test_modules_have_unique_basenames():
+    """The test folders are not packages (pytest's rootdir-relative ``prepend`` import), so two
+    test modules with one basename, in tests/ or benchmarks/, clash at collection."""
+    seen: dict[str, str] = {}
+    for folder in ("tests", "benchmarks"):
+        for path in sorted((ROOT / folder).rglob("*.py")):
+            if path.name in ("conftest.py", "__init__.py"):
+                continue
+            rel = path.relative_to(ROOT).as_posix()
+            assert path.name not in seen, f"{rel} and {seen[path.name]} share a basename"
+            seen[path.name] = rel

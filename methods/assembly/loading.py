@@ -24,12 +24,14 @@ from types import ModuleType
 from gnibench.suite.foundation.cache import (
     cache_dir,
     discard,
+    discard_numba_files,
     numba_cache_path,
     record_numba_files,
     verify_numba_files,
     warn,
     write_atomic,
 )
+from gnibench.suite.foundation.files import NotRegularFile, read_regular
 
 _loaded: dict[str, ModuleType] = {}
 
@@ -56,13 +58,16 @@ def load(text: str, prefix: str) -> ModuleType:
         return _loaded[k]
     path = _path(k, prefix)
     if path.exists():
+        damaged = "is corrupt or was modified (its checksum does not match)"
         try:
-            stored = path.read_text()
+            if read_regular(path).decode() == _sealed(text):
+                damaged = ""
+        except NotRegularFile as e:                    # a FIFO in its place, say
+            damaged = e.what
         except (OSError, UnicodeDecodeError):
-            stored = None
-        if stored is None or stored != _sealed(text):
-            warn(f"cached kernel module {path.name} is corrupt or was modified (its checksum does "
-                 f"not match); discarded and rebuilt")
+            pass
+        if damaged:
+            warn(f"cached kernel module {path.name} {damaged}; discarded and rebuilt")
             discard(path)
             for f in path.parent.glob(f"__pycache__/{path.stem}.*"):
                 discard(f)
@@ -76,6 +81,22 @@ def load(text: str, prefix: str) -> ModuleType:
     spec.loader.exec_module(kernel)
     _loaded[k] = kernel
     return kernel
+
+
+def forget(*kernels: ModuleType) -> bool:
+    """Drop generated modules whose numba cache files failed to load (a ``.nbc`` damaged in a
+    way its manifest does not show, e.g. rewritten together with the manifest): their numba cache
+    files are removed and the next :func:`load` of the same text imports and compiles them
+    afresh. True if any of them had cache files."""
+    had = False
+    for kernel in kernels:
+        for k, loaded in list(_loaded.items()):
+            if loaded is kernel:
+                del _loaded[k]
+        sys.modules.pop(kernel.__name__, None)
+        _recorded.pop(kernel.__file__, None)
+        had |= discard_numba_files(Path(kernel.__file__))
+    return had
 
 
 def _sealed(text: str) -> str:

@@ -36,6 +36,19 @@ def row_budget(dim: int) -> int:
     return max(2, min(limit("GNIBENCH_MAX_ROWS"), limit("GNIBENCH_MAX_OUTPUT_MB") * 2 ** 20 // per_row))
 
 
+def budget_reason(status: Status, buffers: Buffers, t: float) -> str:
+    """Why a run ended by the output budget (``max_rows``), with the numbers; "" otherwise."""
+    if status is not Status.MAX_ROWS:
+        return ""
+    from gnibench.suite.foundation.budgets import limit
+
+    rows = buffers.before + buffers.row
+    return (f"the output budget is full at t = {t:.17g} after {rows} rows (at most {buffers.cap} "
+            f"rows of {buffers.dim} states: GNIBENCH_MAX_ROWS={limit('GNIBENCH_MAX_ROWS')}, "
+            f"GNIBENCH_MAX_OUTPUT_MB={limit('GNIBENCH_MAX_OUTPUT_MB')}); sample less often "
+            f"(--every, --dt-out) or raise the limits")
+
+
 class Buffers:
     """Output buffers of a compiled driver: the rows written so far, and views with room left."""
 

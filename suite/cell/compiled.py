@@ -106,6 +106,23 @@ def problem_kernel(problem: Bound) -> ProblemKernel:
 _cells: dict[tuple[str, str], CompiledCell] = {}
 
 
+def forget_damaged(problem: Bound, method) -> bool:
+    """After loading or warming up a cell failed: forget its generated modules and remove their
+    numba cache files (:func:`gnibench.methods.assembly.loading.forget`), so that the next
+    :func:`compile_cell` compiles them afresh. True if there were cache files to blame; False
+    means the failure did not come from the cache."""
+    from gnibench.methods.assembly.loading import forget
+
+    modules = {assemble(problem, method, "samples"), assemble_problem(problem)}
+    for k, cell in list(_cells.items()):
+        if k[:2] == (problem.text(), method.text()):
+            modules.update(cell.loaded())
+    for k, cell in list(_cells.items()):
+        if modules & set(cell.loaded()):
+            del _cells[k]
+    return forget(*modules)
+
+
 def compile_cell(problem: Bound, method) -> CompiledCell:
     """Load the cell's kernels and build ``par``. A cell loaded once in this process is kept (keyed
     by its canonical specs, which fix its module text and ``par``, and by the definitions of user

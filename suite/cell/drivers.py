@@ -33,8 +33,9 @@ from gnibench.methods.assembly.templates.slots import (
     Y_ROWS,
 )
 from gnibench.suite.cell.calls import COUNTERS, Buffers, Progress, run_driver
-from gnibench.suite.cell.compiled import CompiledCell, compile_cell, problem_kernel
+from gnibench.suite.cell.compiled import CompiledCell, compile_cell, forget_damaged, problem_kernel
 from gnibench.suite.cell.trajectory import Trajectory
+from gnibench.suite.foundation.cache import warn
 from gnibench.suite.foundation.params import Bound
 from gnibench.suite.foundation.provenance import versions
 from gnibench.suite.foundation.status import Status
@@ -50,7 +51,9 @@ def build_trajectory(problem: Bound, method, t, y, counters, status: Status, rea
     y0 = tuple(float(v) for v in rec.y0(problem.values))
     t = np.ascontiguousarray(t, dtype=np.float64)
     y = np.ascontiguousarray(y, dtype=np.float64).reshape(len(t), rec.dim)
-    c = np.asarray(counters, dtype=np.float64).reshape(len(t), -1)
+    c = np.asarray(counters, dtype=np.float64)
+    c = c.reshape(len(t), -1) if len(t) else np.zeros((0, max(c.shape[-1] if c.ndim == 2 else 0,
+                                                               COUNTERS - 1)))   # no rows at all
     steps = c[:, 0].astype(np.int64) if np.isfinite(c[:, 0]).all() else c[:, 0].copy()
     return Trajectory(
         problem=problem.text(), method=method.text(), state_names=rec.state, t=t, y=y,
@@ -252,9 +255,25 @@ def ready_cell(problem: Bound, method, name: str | None = None) -> CompiledCell:
                               and kind is AdaptiveDriver else "samples"]
     t0 = time.perf_counter()
     with compiling():
-        cell = compile_cell(problem, method)
-        if name not in cell.warm:
-            kind.scratch(problem, method, name, cell).warm_up()
-            cell.warm.add(name)
-            record_compiled(*cell.loaded())
+        try:
+            cell = _warm(kind, problem, method, name)
+        except OSError:                 # a full disk, say: not a damaged cache entry
+            raise
+        except Exception as e:
+            # numba's cache files verified by their manifest may still fail to load (rewritten
+            # together with it): discarded and compiled afresh, once; any other failure is raised
+            if not forget_damaged(problem, method):
+                raise
+            warn(f"compiled kernels of {problem.id} x {method.id} could not be loaded from the "
+                 f"kernel cache ({type(e).__name__}); discarded and recompiled")
+            cell = _warm(kind, problem, method, name)
     return replace(cell, compile_seconds=time.perf_counter() - t0)
+
+
+def _warm(kind, problem: Bound, method, name: str) -> CompiledCell:
+    cell = compile_cell(problem, method)
+    if name not in cell.warm:
+        kind.scratch(problem, method, name, cell).warm_up()
+        cell.warm.add(name)
+        record_compiled(*cell.loaded())
+    return cell
