@@ -23,12 +23,7 @@ from collections import defaultdict
 from pathlib import Path
 
 import pytest
-from gnibench.suite.foundation import datastack
 from support_order import DURATIONS, TESTS, longest_first, read_durations  # noqa: F401
-
-# the test processes do gnibench's work as its commands and API do, with the frame-stack chunks
-# kept for reuse (suite/foundation/datastack.py; tests/kernels/test_datastack.py also runs without them)
-datastack.install()
 
 
 def pytest_addoption(parser):
@@ -110,7 +105,7 @@ def _freeze_alive() -> None:
 
 def _collector_settings() -> None:
     """The process is frozen before the test modules are imported: gnibench's own freezing while
-    it compiles (``gnibench.suite.cell.codegen.compiling``) then leaves it as it is, also for a
+    it compiles (``gnibench.methods.assembly.loading.compiling``) then leaves it as it is, also for a
     kernel compiled at collection. The oldest generation is collected before each module only
     (third threshold 10**9; the young generations keep their thresholds); a process forked from
     a test process (a pool worker, the drawing process) inherits both, for its short life."""

@@ -4,8 +4,8 @@ Floors, from the ground up (README, "Layout"; ``suite/__init__.py``)::
 
     0 gnibench.suite.foundation   errors, parameter schemas and bounds, status, disk cache, templates
     1 gnibench.problems           problem records, sympy -> numba source
-    2 gnibench.methods            method and modifier records, kernel templates, external engines
-    3 gnibench.suite.cell         specs, code generation, the driver facade, solve, sections, references
+    2 gnibench.methods            method and modifier records, kernel assembly, external engines
+    3 gnibench.suite.cell         specs, compiled cells, the driver facade, solve, sections, references
     4 gnibench.suite.metrics      measurements of a trajectory
     5 gnibench.suite.runs         experiments, runner, tables, storage, bench
     6 gnibench.suite.ledger       the claims ledger: entries, closed forms, identity checks, verdicts

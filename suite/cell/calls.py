@@ -1,6 +1,6 @@
 """Calling a resumable compiled driver: output buffers, work budget, progress and Ctrl-C.
 
-Every compiled driver (methods/kernels/driver.py, adaptive.py, extrapolation.py and their grid and
+Every compiled driver (methods/assembly/templates/fixed.py, adaptive.py, extrapolation.py and their grid and
 section variants) keeps its whole state in ``y_io`` and ``st`` and returns ``STATUS_BUFFER_FULL``
 (its output buffer is full) or ``STATUS_PAUSED`` (the work budget of one call is spent) to be
 called again; :func:`run_driver` does so, with a budget tuned so that one call lasts about

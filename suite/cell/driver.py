@@ -5,7 +5,7 @@ once by :func:`~gnibench.suite.cell.cellspec.build`) and returns a
 :class:`~gnibench.suite.cell.trajectory.Trajectory`, choosing its branch by the cell's kind
 (:class:`~gnibench.suite.cell.cellspec.CellKind`):
 
-* compiled fixed-step methods (``methods/kernels/driver.py``), and compiled adaptive methods
+* compiled fixed-step methods (``methods/assembly/templates/fixed.py``), and compiled adaptive methods
   (embedded pairs with Hairer's control, odex), sampled every K steps;
 * samples on a time grid t_k = k dt_out for every compiled method (``dt_out``: dense output or
   partial steps, :mod:`gnibench.suite.cell.timegrid`);

@@ -1,12 +1,13 @@
 """The compiled drivers as objects, one per kind: their arguments, state, calls and trajectory.
 
-Every compiled cell runs one of the resumable drivers generated into its module: the fixed-step
-loop (methods/kernels/driver.py: ``integrate``, ``integrate_grid``, ``integrate_section``) or the
-adaptive loop shared by the embedded pairs and odex (methods/kernels/adaptive.py:
-``integrate_adaptive``, ``integrate_dense``, ``adaptive_grid``, ``adaptive_section``,
-``adaptive_section_dense``). :class:`FixedStepDriver` and :class:`AdaptiveDriver` are the one
+Every compiled cell runs one of the resumable drivers of its kernel modules
+(methods/assembly/bindings.py ``DRIVERS``): the fixed-step loop (templates/fixed.py:
+``integrate``, ``integrate_grid``, ``integrate_section``) or the adaptive loop shared by the
+embedded pairs and odex (templates/adaptive.py: ``integrate_adaptive``, ``integrate_dense``,
+``adaptive_grid``, ``adaptive_section``, ``adaptive_section_dense``), each in the module of its
+output. :class:`FixedStepDriver` and :class:`AdaptiveDriver` are the one
 place where their arguments are packed, their state (``y_io``, ``st``) is laid out and read by the
-slot names of methods/kernels/slots.py, their calls are run (:func:`.calls.run_driver`: budget,
+slot names of methods/assembly/templates/slots.py, their calls are run (:func:`.calls.run_driver`: budget,
 buffers, progress, Ctrl-C) and their kernels warmed up. :func:`build_trajectory` is the one place
 a :class:`~gnibench.suite.cell.trajectory.Trajectory` is built, for every kind of cell (compiled,
 external engine, transformed problem, section crossings).
@@ -18,7 +19,8 @@ from dataclasses import replace
 from typing import ClassVar
 
 import numpy as np
-from gnibench.methods.kernels.slots import (
+from gnibench.methods.assembly.loading import compiling, record_compiled
+from gnibench.methods.assembly.templates.slots import (
     ROW_Y,
     SLOTS,
     ST_NFEV,
@@ -31,7 +33,6 @@ from gnibench.methods.kernels.slots import (
     Y_ROWS,
 )
 from gnibench.suite.cell.calls import COUNTERS, Buffers, Progress, run_driver
-from gnibench.suite.cell.codegen import compiling, record_compiled
 from gnibench.suite.cell.compiled import CompiledCell, compile_cell, forget_damaged, problem_kernel
 from gnibench.suite.cell.trajectory import Trajectory
 from gnibench.suite.foundation.cache import warn
@@ -78,7 +79,7 @@ class Driver:
                  cell: CompiledCell | None = None):
         self.problem, self.method, self.name = problem, method, name
         self.cell = cell if cell is not None else ready_cell(problem, method, name)
-        self.fn = getattr(self.cell.kernel, name)
+        self.fn = self.cell.driver(name)
         self.every, self.dt_out, self.n_out = int(every), float(dt_out), int(n_out)
         self.y_io = np.zeros((Y_ROWS, problem.record.dim))
         self.y_io[ROW_Y] = self.cell.y0
@@ -86,7 +87,7 @@ class Driver:
         self.st[ST_TCOMP] = tcomp
         self.st[ST_WANTED] = wanted
 
-    # -- the state, by slot name (methods/kernels/slots.py) --------------------------------------
+    # -- the state, by slot name (methods/assembly/templates/slots.py) ---------------------------
     def slot(self, name: str) -> float:
         return float(self.st[SLOTS[name]])
 
@@ -274,5 +275,5 @@ def _warm(kind, problem: Bound, method, name: str) -> CompiledCell:
     if name not in cell.warm:
         kind.scratch(problem, method, name, cell).warm_up()
         cell.warm.add(name)
-        record_compiled(cell.kernel, cell.problem_kernel)
+        record_compiled(*cell.loaded())
     return cell

@@ -297,9 +297,7 @@ def main(argv=None) -> int:
     """The command line; returns the exit code: 0, 1 (a verdict or comparison that failed, or a
     fault during work such as a full disk), 2 (bad input), 130/143 (SIGINT/SIGTERM)."""
     from gnibench.suite.cli import signals, streams
-    from gnibench.suite.foundation import datastack
 
-    datastack.install()             # CPython's frame stack without mmap churn (datastack.py)
     try:
         with signals.handling(), streams.tolerant():
             return _main(argv)

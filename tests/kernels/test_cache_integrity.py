@@ -141,18 +141,30 @@ def test_manifest_lists_every_compiled_file(warm):
     assert files and set(listed) == files
 
 
-def test_numba_cache_dir_is_where_numba_puts_the_files(tmp_path, monkeypatch):
-    """numba_cache_path follows numba's own locator (numba/core/caching.py), with and without
-    NUMBA_CACHE_DIR."""
+def test_numba_cache_dir_is_where_numba_puts_the_files(tmp_path):
+    """numba_cache_path is where numba writes a cached function's files, with and without
+    NUMBA_CACHE_DIR (observed: a module with a ``cache=True`` function is compiled in a fresh
+    process, through numba's public API only)."""
     from gnibench.suite.foundation.cache import numba_cache_path
-    from numba.core.caching import _CacheLocator
 
     module = tmp_path / "kernels" / "cell_x.py"
-    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
-    assert numba_cache_path(module) == tmp_path / "kernels" / "__pycache__"
-    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "numba"))
-    sub = _CacheLocator.get_suitable_cache_subpath(str(module))
-    assert numba_cache_path(module) == tmp_path / "numba" / sub
+    module.parent.mkdir()
+    module.write_text("from numba import njit\n\n@njit(cache=True)\ndef g(x):\n    return x + 1.0\n")
+    load = ("import importlib.util, sys\n"
+            f"spec = importlib.util.spec_from_file_location('cell_x', {str(module)!r})\n"
+            "m = importlib.util.module_from_spec(spec); spec.loader.exec_module(m); m.g(1.0)\n")
+    for numba_dir in (None, tmp_path / "numba"):
+        env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+        if numba_dir is not None:
+            env["NUMBA_CACHE_DIR"] = str(numba_dir)
+        subprocess.run([sys.executable, "-c", load], env=env, check=True, timeout=300)
+        with pytest.MonkeyPatch.context() as mp:
+            if numba_dir is None:
+                mp.delenv("NUMBA_CACHE_DIR", raising=False)
+            else:
+                mp.setenv("NUMBA_CACHE_DIR", str(numba_dir))
+            where = numba_cache_path(module)
+        assert list(where.glob("cell_x.g-*.nbi")), (numba_dir, sorted(tmp_path.rglob("*.nbi")))
 
 
 def test_files_under_numba_cache_dir_are_checked_too(tmp_path):
@@ -252,10 +264,10 @@ def test_a_full_disk_under_the_kernel_cache_names_the_cache_and_the_remedy(tmp_p
     """Writing a kernel module fails with ENOSPC: one line naming the cache, the file and what to
     do, exit code 1 (before: "No space left on device" alone)."""
     code = ("import errno, sys\n"
-            "from gnibench.suite.cell import codegen\n"
+            "from gnibench.methods.assembly import loading\n"
             "def full(path, text):\n"
             "    raise OSError(errno.ENOSPC, 'No space left on device', str(path))\n"
-            "codegen.write_atomic = full\n"
+            "loading.write_atomic = full\n"
             "from gnibench.suite.cli.main import main\n"
             "sys.exit(main(['solve', 'kepler-2d', 'rk4:h=0.1', '--steps', '3']))\n")
     env = {**os.environ, "GNIBENCH_CACHE_DIR": str(tmp_path / "cache")}

@@ -1,6 +1,6 @@
 """The C reference of the adaptive benchmark is the same algorithm as the numba kernel.
 
-suite/runs/bench_c/kepler_adaptive.c ports methods/kernels/adaptive.py and the generated attempt
+suite/runs/bench_c/kepler_adaptive.c ports methods/assembly/templates/adaptive.py and the generated attempt
 operation for operation (built with -ffp-contract=off), with the pair's coefficients written from
 the same ``Pair`` record (``gnibench.suite.runs.bench.pair_header``). So on kepler-2d the accepted and rejected
 step counts must be equal and the final states agree to round-off (measured: bit-identical). This
