@@ -1,11 +1,12 @@
 """The layout: one import package ``gnibench``, floors that import downwards only, no import cycle.
 
-Floors, from the ground up (README, "Layout"; ``suite/__init__.py``)::
+Floors, from the ground up (docs/explanation/architecture.md, kept equal to :data:`FLOORS` by
+:func:`test_the_architecture_page_shows_the_floors`)::
 
-    0 gnibench.suite.foundation   errors, parameter schemas and bounds, status, disk cache, templates
+    0 gnibench.suite.foundation   errors, parameter schemas and bounds, status, the verified cache
     1 gnibench.problems           problem records, sympy -> numba source
     2 gnibench.methods            method and modifier records, kernel assembly, external engines
-    3 gnibench.suite.cell         specs, compiled cells, the driver facade, solve, sections, references
+    3 gnibench.suite.cell         specs, the typed cell, compiled cells, the driver, references
     4 gnibench.suite.metrics      measurements of a trajectory
     5 gnibench.suite.runs         experiments, runner, tables, storage, bench
     6 gnibench.suite.ledger       the claims ledger: entries, closed forms, identity checks, verdicts
@@ -284,3 +285,25 @@ def test_test_modules_have_unique_basenames():
             rel = path.relative_to(ROOT).as_posix()
             assert path.name not in seen, f"{rel} and {seen[path.name]} share a basename"
             seen[path.name] = rel
+
+
+ARCHITECTURE = ROOT / "docs" / "explanation" / "architecture.md"
+
+
+def test_the_architecture_page_shows_the_floors():
+    """The floor diagram of docs/explanation/architecture.md is :data:`FLOORS`, in order, and
+    every folder or file the page names (in backticks, or in the diagram) exists."""
+    import re
+
+    text = ARCHITECTURE.read_text(encoding="utf-8")
+    diagram = text.split("```text\n", 1)[1].split("```", 1)[0]
+    shown = [(int(m[1]), m[2]) for m in re.finditer(r"^(\d+)\s+(\S+/)", diagram, re.M)]
+    expected = [(level, prefix.removeprefix("gnibench.").replace(".", "/") + "/")
+                for prefix, level in sorted(FLOORS, key=lambda f: -f[1])]
+    assert shown == expected
+    named = set(re.findall(r"`((?:suite|problems|methods|reports|tests|benchmarks|examples|docs)"
+                           r"/[\w./-]*)`", text))
+    named |= {p for _, p in shown}
+    assert named, "no paths found on the page"
+    missing = sorted(p for p in named if not (ROOT / p).exists())
+    assert not missing, f"the architecture page names paths that do not exist: {missing}"
