@@ -1,9 +1,10 @@
 """The batched driver facade: the orbits of an ensemble through one compiled kernel.
 
 :func:`integrate_batch` runs N initial conditions of one compiled cell (fixed step or adaptive,
-sampled every K steps or on a time grid) by the ``batch_<driver>`` function of the cell's module
-(methods/kernels/ensemble.py): a compiled loop over the orbits that calls the single-orbit driver
-a cell of each initial condition runs, with the same arguments, its run-time parameters (a
+sampled every K steps or on a time grid) by the cell's batched module (the output
+``batch_<output>`` of :func:`gnibench.methods.assembly.assemble`, methods/assembly/bindings.py;
+its loop methods/assembly/templates/batch.py): a compiled loop over the orbits that calls the
+single-orbit loop a cell of each initial condition runs, with the same flags and arguments, its run-time parameters (a
 modifier's H0 is the orbit's, [B] (2.5)) and output rows sized for the horizon. Each orbit's
 samples are therefore those of :func:`gnibench.suite.cell.driver.integrate` for that initial
 condition, bit for bit (tests/runs/test_ensembles.py checks it).
@@ -105,19 +106,22 @@ def integrate_batch(spec, y0: np.ndarray, progress=None):
     """The orbits of ``y0`` (shape (n, N)) through the batched driver: an
     :class:`OrbitSamples` (each orbit's t, y, counters, status and
     reason, the wall time of the compiled calls and the compile or load time)."""
-    from gnibench.suite.cell.codegen import compiling, load, record_compiled
+    from gnibench.methods.assembly import assemble
+    from gnibench.methods.assembly.bindings import DRIVER_NAMES, DRIVERS
+    from gnibench.methods.assembly.loading import cache_misses, compiling, record_compiled
     from gnibench.suite.cell.compiled import problem_kernel
     from gnibench.suite.cell.drivers import adaptive_reason, fixed_reason
     from gnibench.suite.foundation.provenance import versions
 
     problem, method = spec.problem, spec.method
     name, args, rows, tcomp = plan(spec)
+    kind, output = DRIVER_NAMES[name]
     n, dim = y0.shape
     t0 = time.perf_counter()
     with compiling():
-        kernel, _, _ = load(problem, method, batched=name)
+        kernel = assemble(problem, method, f"batch_{output}")
         pk = problem_kernel(problem)
-        fn = getattr(kernel, f"batch_{name}")
+        fn = getattr(kernel, DRIVERS[kind].entry(f"batch_{output}"))
         par, _ = orbit_parameters(problem, method, pk, y0[:1])
         _call(fn, y0[:1], par, 0, 0, args, tcomp, rows, dim)      # compile or load: not timed
         record_compiled(kernel, pk.kernel)
@@ -149,7 +153,7 @@ def integrate_batch(spec, y0: np.ndarray, progress=None):
     out.provenance = {"versions": versions(), **{k: v for k, v in args.items()}, "seed": None,
                       "driver": f"batch_{name}", "wall_seconds": out.wall,
                       "compile_seconds": out.compile,
-                      "numba_cache_misses": _misses(kernel)}
+                      "numba_cache_misses": cache_misses(kernel)}
     return out
 
 
@@ -166,7 +170,3 @@ def _call(fn, y0, par, first: int, count: int, args: dict, tcomp: int, rows: int
        0, count, *args.values(), tcomp, out_t, out_y, out_c, r, s)
     return out_t, out_y, out_c, r, s
 
-
-def _misses(kernel) -> int:
-    return sum(sum(f.stats.cache_misses.values()) for f in vars(kernel).values()
-               if hasattr(f, "stats") and hasattr(f.stats, "cache_misses"))

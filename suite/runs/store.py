@@ -45,6 +45,7 @@ from typing import Self
 
 from gnibench.suite.foundation.cache import discard, warn
 from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.files import NotRegularFile, open_regular_file
 from gnibench.suite.foundation.provenance import versions
 from gnibench.suite.runs.partfile import FORMAT as PART_FORMAT
 from gnibench.suite.runs.partfile import HEAD, KEY, MAGIC, Damaged, Entry, Part, encode, load, scan
@@ -194,7 +195,12 @@ class Store:
         """Index the records of every segment, oldest first (a later record of a key wins)."""
         for path in self._segments():
             try:
-                f = open(path, "rb")  # noqa: SIM115 - kept open while the store is
+                f = open_regular_file(path)   # never blocks on a FIFO (foundation/files.py)
+            except NotRegularFile as e:       # a FIFO or a directory in its place
+                warn(f"stored cells {path.relative_to(self.out)} {e.what}; discarded, their "
+                     f"cells are recomputed")
+                discard(path)
+                continue
             except OSError as e:
                 warn(f"stored cells {path.relative_to(self.out)} cannot be read ({e.strerror}); "
                      f"their cells are recomputed")
