@@ -23,7 +23,7 @@ from __future__ import annotations
 from gnibench.methods.assembly.bindings import DRIVERS, FLAGS
 from gnibench.methods.assembly.sections import dense_section_parts, section_parts
 from gnibench.methods.assembly.source import ENTRY, INLINE, INTERNAL, constants, copy
-from gnibench.methods.assembly.templates import events, fixed, sampling
+from gnibench.methods.assembly.templates import batch, events, fixed, sampling
 from gnibench.methods.assembly.templates.slots import STATE, Y_ROWS
 
 
@@ -62,4 +62,4 @@ def write_driver(kind: str, output: str, n: int, locator_from: str = "") -> str:
         return text + copy(driver.loop, ENTRY)
     # an ensemble's module: the orbits' loop, called by the batched loop Python calls
     return (text + constants(STATE=STATE, Y_ROWS=Y_ROWS) + copy(driver.loop, INTERNAL)
-            + copy(driver.batch, ENTRY))
+            + copy(batch.orbit_state, INLINE) + copy(driver.batch, ENTRY))

@@ -115,7 +115,7 @@ def read_tables(out: Path, output: Path | None) -> RunResult:
               for name in ("samples", "cells", "timings")}
     for name, file in (("ensemble", "ensemble"), ("ensemble_stats", "ensemble_stats")):
         path = out / f"{file}.parquet"
-        tables[name] = pd.read_parquet(path) if path.is_file() else None
+        tables[name] = read_parquet(path) if path.exists() else None
     meta = read_parquet_meta(out / "cells.parquet")
     meta.pop("table", None)
     return RunResult(**tables, meta=meta, output=output)

@@ -25,7 +25,10 @@ later record of a key replaces an earlier one (a cell in ``error`` recomputed).
 **Verified when read.** A record carries the sha256 of its part, checked when a later run reads
 it: a part whose bytes do not match (one flipped bit), or that cannot be read, is recomputed with
 one warning line, and its new record replaces it. A segment whose records cannot be followed (a
-damaged head) warns once; the cells after that point are recomputed.
+damaged head) warns once; the cells after that point are recomputed. Segments are opened as
+regular files only (:mod:`gnibench.suite.foundation.files`): a FIFO or a directory in place of one
+is said in one warning line and removed, and its cells are recomputed (opening a FIFO would wait
+for a writer forever).
 
 **Cheap.** What a finished cell costs this process (the parent of the workers): one encoding of
 its columns and rows, one digest, one append to an open file (a file created per cell cost more

@@ -278,16 +278,17 @@ def _roles(text: str) -> dict[str, str]:
 
 @pytest.mark.parametrize("spec, method, output", [
     ("kepler-2d", "dop853", "dense"), ("henon-heiles", "rk4+observer", "section"),
-    ("kepler-2d", "gauss4+projection:on=H", "grid"), ("kepler-2d", "odex", "grid")])
+    ("kepler-2d", "gauss4+projection:on=H", "grid"), ("kepler-2d", "odex", "grid"),
+    ("kepler-2d", "dop853", "batch_dense"), ("kepler-2d", "rk4+observer:on=H", "batch_samples")])
 def test_every_function_has_one_role_and_only_python_s_calls_are_entries(spec, method, output):
     problem, cfg = prepare(spec, method)
     roles = _roles(cell_text(problem, cfg, output))
     assert set(roles.values()) <= set(ROLES), roles
     entries = {name for name, role in roles.items() if role == source.ENTRY}
     kind = "adaptive" if cfg.base.values.get("adaptive") else "fixed"
-    python_calls = {DRIVERS[kind].loop.__name__, "f", "fjac", "dense_coeffs", "dense_eval",
-                    "dense_slope"}
-    assert DRIVERS[kind].loop.__name__ in entries and entries <= python_calls
+    entry = DRIVERS[kind].entry(output)          # a batched output's: its batched loop
+    python_calls = {entry, "f", "fjac", "dense_coeffs", "dense_eval", "dense_slope"}
+    assert entry in entries and entries <= python_calls
 
 
 def test_only_the_functions_python_calls_are_cached_on_disk(tmp_path):

@@ -15,7 +15,8 @@ Python can call it on slices of the ensemble, honour Ctrl-C and show progress be
 
 A batched output (methods/assembly/bindings.py ``DriverKind.batch``) copies the kind's loop as an
 ``@internal`` function and this kind's batched loop as the module's ``@entry``: a cell that is not
-an ensemble compiles nothing more. ``STATE`` and ``Y_ROWS`` are constants of such a module.
+an ensemble compiles nothing more. ``STATE`` and ``Y_ROWS`` are constants of such a module, and
+:func:`orbit_state` an ``@inline`` function.
 """
 from __future__ import annotations
 
@@ -23,14 +24,20 @@ import numpy as np
 from gnibench.methods.assembly.templates.slots import ROW_Y, ST_TCOMP, STATE, Y_ROWS
 
 
+def orbit_state(Y0, i, tcomp):
+    # the resumable state of orbit i before its first call, as Python sets it for one cell
+    y_io = np.zeros((Y_ROWS, N))
+    for k in range(N):
+        y_io[ROW_Y, k] = Y0[i, k]
+    st = np.zeros(STATE)
+    st[ST_TCOMP] = tcomp
+    return y_io, st
+
+
 def batch_fixed(Y0, PAR, first, count, h, nsteps, h_last, every, dt_out, n_out, tcomp, out_t,
                 out_y, out_c, rows, status):
     for i in range(first, first + count):
-        y_io = np.zeros((Y_ROWS, N))
-        for k in range(N):
-            y_io[ROW_Y, k] = Y0[i, k]
-        st = np.zeros(STATE)
-        st[ST_TCOMP] = tcomp
+        y_io, st = orbit_state(Y0, i, tcomp)
         s, r = integrate(y_io, st, PAR[i], h, nsteps, h_last, every, dt_out, n_out, 1 << 62,
                          out_t[i], out_y[i], out_c[i])
         status[i] = s
@@ -40,11 +47,7 @@ def batch_fixed(Y0, PAR, first, count, h, nsteps, h_last, every, dt_out, n_out, 
 def batch_adaptive(Y0, PAR, first, count, t_end, h0, hmax, rtol, atol, every, dt_out, n_out,
                    max_steps, tcomp, out_t, out_y, out_c, rows, status):
     for i in range(first, first + count):
-        y_io = np.zeros((Y_ROWS, N))
-        for k in range(N):
-            y_io[ROW_Y, k] = Y0[i, k]
-        st = np.zeros(STATE)
-        st[ST_TCOMP] = tcomp
+        y_io, st = orbit_state(Y0, i, tcomp)
         s, r = integrate_adaptive(y_io, st, PAR[i], t_end, h0, hmax, rtol, atol, every, dt_out,
                                   n_out, max_steps, 1 << 62, out_t[i], out_y[i], out_c[i])
         status[i] = s
