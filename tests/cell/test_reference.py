@@ -121,7 +121,7 @@ def test_second_request_reads_the_cached_file(long_run, monkeypatch):
 
     monkeypatch.setattr("gnibench.methods.engines.heyoka.heyoka_propagate", no_integration)
     again = reference_solution(problem, t, "heyoka", "real128")
-    assert again.cached and again.seconds < 1.0
+    assert again.cached          # (no_integration above: it was read, not integrated again)
     assert np.array_equal(again.y, sol.y)
     assert all(a == b for a, b in zip(again.y_full.ravel(), sol.y_full.ravel()))
     # another tolerance, grid or problem option is another file
