@@ -90,14 +90,30 @@ def kind_of(base: str) -> str:
 
 
 def add_families(cells):
-    """The cells table with columns ``family``, ``sweep``, ``sweep_value``, ``adaptive`` and
-    ``method_kind`` (how the method runs: the table's column, else the registry's)."""
+    """The cells table with columns ``family``, ``sweep``, ``sweep_value``, ``adaptive``,
+    ``base_method``, ``modifiers``, ``problem_id`` and ``method_kind`` (how the method runs: the
+    table's column, else the registry's); tables written before the columns ``swept`` and
+    ``setup_method`` get them from the family (the method without its sweep option)."""
+    from gnibench.suite.cell.spec import structure
+
     fams = [family_of(m) for m in cells["method"]]
     out = cells.copy()
     out["family"] = [f.label for f in fams]
     out["sweep"] = [f.sweep for f in fams]
     out["sweep_value"] = [f.value for f in fams]
     out["adaptive"] = [f.adaptive for f in fams]
+    parts = [structure(m) for m in cells["method"]]
+    if "base_method" not in out:
+        out["base_method"] = [p.id for p in parts]
+    if "modifiers" not in out:
+        out["modifiers"] = ["+".join(m.id for m in p.modifiers) for p in parts]
+    if "problem_id" not in out:
+        out["problem_id"] = [structure(p, "problem").id for p in cells["problem"]]
     if "method_kind" not in out:
         out["method_kind"] = [kind_of(f.base) for f in fams]
+    if "swept" not in out:
+        out["swept"] = [f.sweep for f in fams]
+    if "setup_method" not in out:
+        out["setup_method"] = [p.without(f.sweep).text() if f.sweep else p.text()
+                               for p, f in zip(parts, fams)]
     return out

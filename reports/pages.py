@@ -19,7 +19,12 @@ from gnibench.reports import league, plots, workprecision
 FIXED = {"cell", "group", "label", "problem", "method", "method_kind", "h", "t_end",
          "steps_planned", "every", "status", "reason", "steps", "t_final", "nfev", "njev",
          "samples", "integrals", "reference", "metrics", "metric_notes", "final_global_error",
-         "max_global_error", "family", "sweep", "sweep_value", "adaptive"}
+         "max_global_error", "family", "sweep", "sweep_value", "adaptive", "problem_id",
+         "base_method", "modifiers", "swept", "setup_method", "setup", "context", "swept_text",
+         "_key", "solution_size", "max_reference_error", "final_reference_error"}
+#: columns of the metrics shown in the table's notes rather than as columns
+QUIET = ("growth_exponent_", "growth_reason_", "order_reason_", "scale_", "order_used_",
+         "order_error_")
 _NOTE = re.compile(r"^\s*\((choice|reading)\)\s*", re.IGNORECASE)
 
 
@@ -70,66 +75,99 @@ def _horizon(row) -> str:
     return f"steps = {num(row.get('steps_planned'))}"
 
 
-def cells_table(part, samples, wall: dict[int, float], compile_s: dict[int, float],
-                by_cell: dict | None = None, memo: dict | None = None) -> dict:
+def cells_table(part, samples, wall: dict[int, tuple], compile_s: dict[int, float],
+                by_cell: dict | None = None, memo: dict | None = None,
+                names: dict | None = None) -> dict:
     """The table of one problem's cells: header, rows of strings, which columns are specs.
-    ``by_cell``: :func:`~gnibench.reports.plots.trajectories` of ``samples`` (if already split);
-    ``memo``: fitted growth exponents, shared with the figures."""
+    ``wall``: each cell's (fastest, median, spread, runs) wall times; ``by_cell``:
+    :func:`~gnibench.reports.plots.trajectories` of ``samples`` (if already split); ``memo``:
+    fitted growth exponents, shared with the figures; ``names``: family names by setup id.
+    The last column, notes, says why an order or a growth exponent is missing and which errors
+    do not measure the method (saturated, below the reference's accuracy)."""
+    from gnibench.suite.metrics.regime import trusted
+
     integrals = [i for i in dict.fromkeys("/".join(part["integrals"].fillna("")).split("/")) if i]
     errs = [i for i in integrals if f"max_abs_err_{i}" in part and part[f"max_abs_err_{i}"].notna().any()]
     has_global = part["final_global_error"].notna().any()
     extra = [c for c in part.columns if c not in FIXED and not c.startswith("max_abs_err_")
-             and not c.startswith("growth_exponent_") and part[c].notna().any()
+             and not c.startswith(QUIET) and part[c].notna().any()
              and not (part[c].astype(str) == "").all()]
-    header = ["cell", "method", "status", "horizon", "every", "t reached", "steps", "nfev",
-              "run ms", "compile s"]
+    header = ["cell", "method", "family", "swept", "status", "horizon", "every", "t reached",
+              "steps", "nfev", "run ms (fastest)", "median ms, spread", "compile s"]
     header += [f"max |err {i}|" for i in errs] + [f"growth exp. {i}" for i in errs]
     if has_global:
-        header += ["final global error", "max global error", "growth exp. global", "reference"]
-    header += extra
+        header += ["final global error", "max global error", "reference's accuracy",
+                   "growth exp. global", "reference"]
+    header += extra + ["notes"]
     if samples is not None and by_cell is None:
         by_cell = plots.trajectories(samples)
+    verdicts = {"max_global_error": trusted(part, "max_global_error")} if has_global else {}
+    for i in errs:
+        verdicts[f"max_abs_err_{i}"] = trusted(part, f"max_abs_err_{i}")
     rows = []
-    for r in part.to_dict("records"):
+    for k, r in enumerate(part.to_dict("records")):
         cid = int(r["cell"])
         s = by_cell.get(cid) if samples is not None else None
         kind = " (runs in Python)" if r.get("method_kind") == "python" else ""
-        row = [str(cid), str(r["method"]) + kind, str(r["status"]), _horizon(r), num(r["every"]),
+        fastest, median, spread, runs = wall.get(cid, (math.nan, math.nan, math.nan, 0))
+        notes = []
+        row = [str(cid), str(r["method"]) + kind, (names or {}).get(int(r["setup"]), r["family"]),
+               str(r.get("swept_text") or "–"), str(r["status"]), _horizon(r), num(r["every"]),
                num(r["t_final"], ".6g"), num(r["steps"]), num(r["nfev"]),
-               num(wall.get(cid, math.nan) * 1e3), num(compile_s.get(cid), ".2f")]
+               num(fastest * 1e3),
+               f"{num(median * 1e3)}, {num(spread * 100, '.0f')} % ({runs} runs)" if runs > 1
+               else "–", num(compile_s.get(cid), ".2f")]
         row += [num(r[f"max_abs_err_{i}"]) for i in errs]
-        row += [num(plots.exponent(r, s, i, memo) if samples is not None else math.nan, ".2f")
-                for i in errs]
+        for i in errs:
+            p, why = plots.exponent(r, s, i, memo) if samples is not None else (math.nan, "")
+            row.append(num(p, ".2f"))
+            notes += [f"growth {i}: {why}"] if why else []
         if has_global:
+            p, why = plots.exponent(r, s, "global", memo) if samples is not None else \
+                (math.nan, "")
+            notes += [f"growth global: {why}"] if why else []
             row += [num(r["final_global_error"]), num(r["max_global_error"]),
-                    num(plots.exponent(r, s, "global", memo) if samples is not None
-                        else math.nan, ".2f"),
+                    num(r.get("max_reference_error")), num(p, ".2f"),
                     str(r.get("reference") or "–")]
         row += [num(r[c]) if isinstance(r[c], (int, float)) else str(r[c]) for c in extra]
+        notes += [f"{c.removeprefix('max_')}: {v[k]}" for c, v in verdicts.items()
+                  if v[k] and v[k] != "failed"]
+        notes += [f"{c.removeprefix('order_reason_')} order: {r[c]}" for c in r
+                  if c.startswith("order_reason_") and isinstance(r[c], str) and r[c]]
+        row.append("; ".join(notes) or "–")
         rows.append(row)
-    return {"header": header, "rows": rows, "code": [1], "status_col": True}
+    return {"header": header, "rows": rows, "code": [1], "status_col": 4,
+            "wrap": [len(header) - 1]}
 
 
-def league_tables(part, wall: dict[int, float], thresholds) -> dict:
-    """The league tables of one problem, one per threshold, with the words stating them."""
+def league_tables(part, wall: dict[int, float], thresholds, names: dict | None = None) -> dict:
+    """The league tables of one context, one per threshold, with the words stating them."""
     column, words = league.accuracy_column(part)
     if not column or not workprecision.has_sweeps(part):
         return {}
     tables = []
     for eps in thresholds:
-        rows = league.league(part, wall, eps, column)
+        why = league.unrankable(part, column, eps)
+        if why:
+            tables.append({"threshold": f"{eps:.0e}", "rows": [], "note": why})
+            continue
+        rows = league.league(part, wall, eps, column, names)
         body = []
         for r in rows:
             failed = "; ".join(f"cell {c} {s}: {why}" if why else f"cell {c} {s}"
                                for c, s, why in r.failed)
+            left = "; ".join(f"cell {c}: {why}" for c, why in r.excluded)
+            order = num(r.order, ".2f") if math.isfinite(r.order) else \
+                (f"NA: {r.order_reason}" if r.order_reason else "–")
             body.append([num(r.rank_nfev) if r.rank_nfev else "–", r.family,
                          _cost(r.nfev, ".3g"), _cost(r.wall, ".3g", 1e3),
-                         num(r.rank_wall) if r.rank_wall else "–", num(r.best_error),
-                         f"{r.cells}", failed or "–"])
-        tables.append({"threshold": f"{eps:.0e}", "rows": body})
+                         num(r.rank_wall) if r.rank_wall else "–", num(r.best_error), order,
+                         f"{r.cells}", "; ".join(x for x in (failed, left) if x) or "–"])
+        tables.append({"threshold": f"{eps:.0e}", "rows": body, "note": ""})
     return {"measure": column, "words": words, "tables": tables,
-            "header": ["rank (nfev)", "method family", "nfev to reach ε", "wall ms to reach ε",
-                       "rank (wall)", "best error", "cells", "failed cells"],
+            "header": ["rank (nfev)", "family", "nfev to reach ε", "wall ms to reach ε",
+                       "rank (wall)", "best error", "order in h", "cells",
+                       "failed or left-out cells"],
             "code": [1]}
 
 
@@ -144,20 +182,31 @@ def _cost(c: league.Cost, fmt: str, scale: float = 1.0) -> str:
     return f"{value} (cell {c.cells[0]})"
 
 
-def experiment_page(res, img_dir: Path, slug: str, thresholds, jobs) -> dict:
+def experiment_page(res, img_dir: Path, slug: str, thresholds, jobs, palette=None,
+                    plots_options: dict | None = None) -> dict:
     """The content of one experiment's page; the drawing of its figures (into ``img_dir``) is
-    appended to ``jobs``."""
-    meta, cells = res.meta, res.cells
+    appended to ``jobs``. ``palette``: the report's styles of the families
+    (:class:`gnibench.reports.palette.Palette`, shared by the pages); ``plots_options``: replace
+    the ``[report]`` keys of the experiment file."""
+    from gnibench.reports.palette import Palette
+    from gnibench.reports.section import problem_section
+    from gnibench.reports.setups import add_setups
+    from gnibench.suite.runs.report_schema import report_options
+
+    meta = res.meta
+    cells = add_setups(res.cells)
+    options = report_options({**(meta.get("report") or {}), **(plots_options or {})},
+                             f"{res.name}: report").model_dump()
+    palette = palette if palette is not None else Palette()
     paragraphs, notes = split_description(meta.get("description", ""))
-    wall = res.wall_by_cell()
-    t = res.timings
-    compile_s = {int(c): float(v) for c, v in zip(t["cell"], t["compile_seconds"])} if len(t) else {}
     counts = cells["status"].value_counts()
+    complete = bool(meta.get("complete", True))
     page = {
         "slug": slug, "name": res.name, "title": str(meta.get("title") or res.name),
         "reference": str(meta.get("reference") or ""), "source": str(meta.get("source") or ""),
-        "paragraphs": paragraphs, "notes": notes,
-        "complete": bool(meta.get("complete", True)),
+        "paragraphs": paragraphs, "notes": notes, "complete": complete,
+        "state": "incomplete" if not complete else ("failures" if (cells["status"] != "ok").any()
+                                                    else "complete"),
         "cells_done": str(meta.get("cells_done", len(cells))),
         "cells_total": str(meta.get("cells_total", len(cells))),
         "statuses": ", ".join(f"{n} {s}" for s, n in counts.items()),
@@ -165,6 +214,7 @@ def experiment_page(res, img_dir: Path, slug: str, thresholds, jobs) -> dict:
         "written_at": res.written_at, "toml": str(meta.get("experiment_toml") or ""),
         "dir": str(res.dir), "figure": res.figure, "figure_error": res.figure_error,
         "thresholds": [f"{e:.0e}" for e in thresholds], "problems": [],
+        "target": f"{options.get('target') or min(thresholds):.0e}",
     }
     if res.figure:
         page["figure"] = {**res.figure, "images": [f"{slug}/figure/{f}" for f in res.figure["images"]]}
@@ -178,22 +228,10 @@ def experiment_page(res, img_dir: Path, slug: str, thresholds, jobs) -> dict:
         part = cells[sections == problem]
         prefix = f"{i:02d}-" + re.sub(r"[^A-Za-z0-9._-]+", "_", str(problem))[:40]
         ps = samples[samples["cell"].isin(part["cell"])] if samples is not None else None
-        by_cell = plots.trajectories(ps) if ps is not None else None
-        memo: dict = {}
-        figs = plots.time_figures(problem, part, ps, img_dir, prefix, slug, jobs, by_cell, memo) \
-            if ps is not None and len(ps) else []
-        wp = workprecision.wp_figures(problem, part, wall, img_dir, prefix, slug, jobs) \
-            if workprecision.has_sweeps(part) else []
-        failed = [{"cell": str(r.cell), "method": str(r.method), "status": str(r.status),
-                   "reason": str(r.reason or "")} for r in part.itertuples() if r.status != "ok"]
-        groups = [{"group": str(g), "label": str(lab or "")} for g, lab in
-                  part[["group", "label"]].drop_duplicates().itertuples(index=False)]
-        page["problems"].append({
-            "name": str(problem), "anchor": prefix, "figures": [f.__dict__ for f in figs],
-            "wp": [f.__dict__ for f in wp], "no_nfev": workprecision.no_nfev(part) if wp else [],
-            "league": league_tables(part, wall, thresholds),
-            "table": cells_table(part, ps, wall, compile_s, by_cell, memo), "failed": failed,
-            "groups": groups})
+        page["problems"].append(problem_section(problem, part, ps, img_dir, prefix, slug, jobs,
+                                                res, thresholds, palette, options))
+    page["interactive"] = any(c["interactive"] for pr in page["problems"]
+                              for c in pr["contexts"])
     return page
 
 
@@ -232,9 +270,18 @@ def short_problems(problems) -> list[str]:
 
 
 def index_entry(page: dict) -> dict:
-    """What the index shows of an experiment page."""
+    """What the index shows of an experiment page: its state (complete, complete with
+    failures, incomplete), a thumbnail (the reproduced figure, else the first work-precision
+    diagram, else the first figure) and one headline (the cheapest family to reach the target
+    accuracy in the first context that ranks any)."""
+    contexts = [c for pr in page["problems"] for c in pr["contexts"]]
+    wp = [f["file"] for c in contexts for f in c["wp"]]
+    figs = [f["file"] for pr in page["problems"] for f in pr["figures"]]
+    heads = [c["headline"] for c in contexts if c["headline"]["text"]]
+    head = next((h for h in heads if h["rank"]), heads[0] if heads else {"text": ""})
     return {k: page[k] for k in ("slug", "name", "title", "reference", "complete", "cells_done",
-                                 "cells_total", "statuses")} | {
+                                 "cells_total", "statuses", "state")} | {
         "problems": page["problem_ids"],
         "has_figure": bool(page.get("figure")),
-        "thumb": next(iter((page.get("figure") or {}).get("images") or []), "")}
+        "headline": head["text"], "ranked": bool(head.get("rank")),
+        "thumb": next(iter((page.get("figure") or {}).get("images") or wp or figs), "")}

@@ -47,14 +47,15 @@ def read_tables(out: Path, output: Path | None) -> RunResult:
 
 
 def run(experiment, *, output=None, jobs: int | None = None, executor: str = "local",
-        fresh: bool = False, scheduler: str | None = None, scale: str = "paper") -> RunResult:
+        fresh: bool = False, scheduler: str | None = None, scale: str = "paper",
+        repeat: int | None = None) -> RunResult:
     """Run an experiment, as ``gnibench run``: a shipped id (``"quick"``), a path to a TOML file,
     or a dict with the TOML schema (``suite/experiments/README.md``; its ``load`` paths are
     relative to the working directory). ``output``: the results
     directory (resumable, as the command line's ``-o``; no report is written, see
     :func:`report`); None runs in a temporary directory and keeps the tables in memory only.
-    ``jobs``, ``executor`` (``local`` or ``dask``), ``scheduler``, ``fresh``, ``scale``: as on
-    the command line."""
+    ``jobs``, ``executor`` (``local`` or ``dask``), ``scheduler``, ``fresh``, ``scale``,
+    ``repeat`` (timed integrations per cell): as on the command line."""
     from gnibench.reports.markdown import render_summary
     from gnibench.suite.cell.user.loader import discover, refresh
     from gnibench.suite.runs import executors
@@ -64,9 +65,10 @@ def run(experiment, *, output=None, jobs: int | None = None, executor: str = "lo
     discover()                      # GNIBENCH_LOAD and entry points, as `gnibench run`
     refresh()                       # definitions edited since they were loaded
     if isinstance(experiment, dict):        # its `load` paths are relative to the working dir
-        exp = parse_experiment(toml_text(experiment), "experiment dict", scale, Path.cwd())
+        exp = parse_experiment(toml_text(experiment), "experiment dict", scale, Path.cwd(),
+                               repeat)
     elif isinstance(experiment, (str, Path)):
-        exp = load_experiment(experiment, scale)
+        exp = load_experiment(experiment, scale, repeat)
     else:
         raise UserError(f"bad experiment {type(experiment).__name__}; allowed: a shipped "
                         f"experiment id, a path to a TOML file, or a dict with the TOML schema")

@@ -156,13 +156,14 @@ def check_budgets(problem: Bound, method, steps, t_end, every, section, dt_out=N
 
 def attach_reference(traj: Trajectory, problem: Bound, reference) -> None:
     """The reference solution at the trajectory's sample times (:mod:`.reference`)."""
-    from gnibench.suite.cell.reference import reference_solution
+    from gnibench.suite.cell.reference import reference_accuracy, reference_solution
 
     if len(traj.t) == 0:
         return
     sol = reference_solution(problem, traj.t, reference)
     traj.reference = ReferenceSamples(sol.y, {**reference.describe(), "cached": sol.cached,
-                                              "seconds": sol.seconds})
+                                              "seconds": sol.seconds},
+                                      reference_accuracy(problem, sol))
 
 
 def _check_reverse(problem: Bound, method, dt_out, section) -> None:
