@@ -32,18 +32,21 @@ BRIEF = 40
 __all__ = ["Figure", "clip", "time_figures"]
 
 
-def brief(problem: str) -> str:
+def brief(problem: str, problem_id: str | None) -> str:
     """A problem spec as a title or an index card names it: as it is up to ``BRIEF`` characters,
-    else by its id (the page's section heading shows the whole spec)."""
-    from gnibench.suite.cell.spec import item_id
-    from gnibench.suite.foundation.errors import UserError
-
+    else by its id (``problem_id``, the cells' column; the page's section heading shows the whole
+    spec); a longer name that is not a spec (``problem_id`` None: a section label such as
+    "id (n initial values)") is clipped."""
     if len(problem) <= BRIEF:
         return problem
-    try:
-        return item_id(problem, "problem")
-    except (UserError, ValueError):          # a section label: "id (n initial values)"
-        return clip(problem, BRIEF)
+    return problem_id if problem_id is not None else clip(problem, BRIEF)
+
+
+def problem_id_of(name: str, cells) -> str | None:
+    """The problem id of a page section named ``name`` when it is one of the cells' problem
+    specs, else None (a section label)."""
+    hit = cells.loc[cells["problem"].astype(str) == name, "problem_id"]
+    return str(hit.iloc[0]) if len(hit) else None
 
 
 def pick_cells(cells) -> tuple[list[int], str]:
@@ -213,6 +216,7 @@ def time_plots(problem: str, cells, samples, by_cell=None, memo=None, style=None
     names = family_names(cells) if names is None else names
     shade = shades(cells)
     ids, note = choose_cells(cells[cells["cell"].isin(traj["cell"].unique())], options)
+    short = brief(problem, problem_id_of(problem, cells))
 
     def finish(panel: Panel) -> Panel:
         if axis != "auto":
@@ -238,7 +242,7 @@ def time_plots(problem: str, cells, samples, by_cell=None, memo=None, style=None
                             "exponents in t are in the table of cells") + ").")
         cap += f" {zeros} exact zeros are not drawn." if zeros else ""
         out.append(("invariants", page_plot(panels, cols=1 if one else 2, panel_height=3.2,
-                                            title=f"{brief(problem)}: invariant errors"),
+                                            title=f"{short}: invariant errors"),
                     f"{problem}: invariant errors", f"{cap} {note}".strip()))
     if ids and "global-error" in kinds and "global_error" in traj and \
             traj.loc[traj["cell"].isin(ids), "global_error"].notna().any():
@@ -246,7 +250,7 @@ def time_plots(problem: str, cells, samples, by_cell=None, memo=None, style=None
                           shade=shade, yscale=yscale)
         panel.ylabel = "global error |y − y_ref|"
         refs = sorted({r for r in cells["reference"].fillna("") if r}) if "reference" in cells else []
-        title = f"{brief(problem)}: global error" + (f" (against {', '.join(refs)})" if refs else "")
+        title = f"{short}: global error" + (f" (against {', '.join(refs)})" if refs else "")
         out.append(("global-error", page_plot([finish(panel)], title=title),
                     f"{problem}: global error",
                     f"Global error against time ({scale_words}; legend: its growth exponent in "
@@ -255,44 +259,43 @@ def time_plots(problem: str, cells, samples, by_cell=None, memo=None, style=None
         panel, _ = _panel(cells, by_cell, ids, "eta", style, "eta", names, with_exponent=False,
                           shade=shade, yscale=yscale)
         panel.ylabel = "η(nT) (rad)"
-        out.append(("eta", page_plot([finish(panel)], title=f"{brief(problem)}: η(nT), angle "
+        out.append(("eta", page_plot([finish(panel)], title=f"{short}: η(nT), angle "
                                                            f"between q(0) and q(nT)"),
                     f"{problem}: η(nT)", f"η(nT) at whole periods ([B] §5.2, Fig 12), {yscale} "
                                          f"scale."))
     if "sections" in kinds and "crossing" in samples and samples["crossing"].notna().any():
         plot = section_plot(problem, cells, samples[samples["crossing"].notna()], style, names)
         if plot is not None:
-            coords = section_coords(str(cells["problem"].iloc[0]))
+            coords = section_coords(str(cells["problem_id"].iloc[0]))
             out.append(("sections", plot, f"{problem}: Poincaré section",
                         f"Section crossings in the section's coordinates ({coords[0]}, "
                         f"{coords[1]}), one panel per section cell."))
     return out
 
 
-def _section(problem: str):
-    """The (first) Poincaré section of a problem (``problem``: a spec), or None."""
+def _section(problem_id: str):
+    """The (first) Poincaré section of a problem (by its id), or None."""
     from gnibench.problems import REGISTRY
-    from gnibench.suite.cell.spec import item_id
 
-    record = REGISTRY.get(item_id(problem, "problem"))
+    record = REGISTRY.get(problem_id)
     return record.sections[0] if record is not None and record.sections else None
 
 
-def section_charts(problem: str) -> int:
+def section_charts(problem_id: str) -> int:
     """How many charts a problem's section points are labelled with (0: none or unknown)."""
-    section = _section(problem)
+    section = _section(problem_id)
     return int(section.charts) if section is not None else 0
 
 
-def section_coords(problem: str) -> tuple[str, ...]:
-    """The recorded coordinates of a problem's (first) Poincaré section (``problem``: a spec)."""
-    section = _section(problem)
+def section_coords(problem_id: str) -> tuple[str, ...]:
+    """The recorded coordinates of a problem's (first) Poincaré section (by its id)."""
+    section = _section(problem_id)
     return tuple(section.coords) if section is not None else ()
 
 
 def section_plot(problem: str, cells, points, style, names) -> Plot | None:
     """One panel per section cell: its crossings in the section's coordinates."""
-    coords = section_coords(str(cells["problem"].iloc[0]))
+    coords = section_coords(str(cells["problem_id"].iloc[0]))
     if len(coords) < 2:
         return None
     ids = [int(c) for c in cells["cell"] if c in set(points["cell"])][:MAX_CURVES]
@@ -308,7 +311,7 @@ def section_plot(problem: str, cells, points, style, names) -> Plot | None:
                 "s": 1.5, "c": s["chart"].to_numpy(float), "cmap": "tab10", "vmin": 0.5,
                 "vmax": 10.5, "linewidths": 0}, scatter=True))
             # the colour bar shows the problem's charts only, not tab10's unused colours above
-            n = section_charts(str(cells["problem"].iloc[0])) or int(np.nanmax(s["chart"]))
+            n = section_charts(str(cells["problem_id"].iloc[0])) or int(np.nanmax(s["chart"]))
             panel.colorbar = {"label": "chart", "ticks": list(range(1, n + 1)),
                               "boundaries": [k + 0.5 for k in range(n + 1)],
                               "values": list(range(1, n + 1))}
@@ -318,4 +321,4 @@ def section_plot(problem: str, cells, points, style, names) -> Plot | None:
                                               "linewidths": 0}, scatter=True))
         panels.append(panel)
     return page_plot(panels, cols=2 if len(ids) > 1 else 1, panel_height=4.6,
-                     title=f"{brief(problem)}: Poincaré section")
+                     title=f"{brief(problem, problem_id_of(problem, cells))}: Poincaré section")

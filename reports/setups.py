@@ -28,6 +28,9 @@ def add_setups(cells):
     from gnibench.suite.metrics.families import final_time, setup_key, setups
 
     out = cells.copy()
+    if "swept" not in out:                    # tables written before the column: its sweep
+        out["swept"] = out["sweep"].fillna("")
+        cells = out
     out["setup"] = setups(cells) if len(cells) else []
     rows = cells.to_dict("records")
     out["context"] = ["\x1f".join((str(r["problem"]), final_time(r), str(r.get("reference") or "")))

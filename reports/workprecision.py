@@ -178,9 +178,9 @@ def wp_figures(problem: str, cells, wall_ms: dict[int, float], out_dir: Path, pr
     ``wall_ms``: each cell's wall time (ms); ``style``, ``names``: each family's style and name
     by setup id; ``context``: what sets the context apart (its title); ``repeats``: how the wall
     times were measured, in words."""
-    from gnibench.reports.plots import brief
+    from gnibench.reports.plots import brief, problem_id_of
 
-    title = f"{brief(problem)}: work-precision" + (f" ({context})" if context else "")
+    title = f"{brief(problem, problem_id_of(problem, cells))}: work-precision" + (f" ({context})" if context else "")
     plot, notes = wp_plot(title, cells, wall_ms, style, names, options)
     if plot is None:
         return []

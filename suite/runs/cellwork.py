@@ -56,7 +56,7 @@ def run_cell(cell, report: Callable[[int, float], None] | None = None,
     """Solve one cell (its typed cell, ``cell.spec``, as it is), apply its metrics, and build its
     rows. ``frames=False``: the samples are left as columns (a dict of arrays; a pool worker
     builds no DataFrame and never imports pandas), made a table by :func:`with_frame`."""
-    from gnibench.suite.cell.solve import solve_cell
+    from gnibench.suite.cell.driver import integrate
     from gnibench.suite.metrics.compute import apply
     from gnibench.suite.runs.tables import cell_row, cell_sample_columns, cell_samples, timing_row
 
@@ -64,7 +64,7 @@ def run_cell(cell, report: Callable[[int, float], None] | None = None,
     progress = _throttled(cell.id, report) if report is not None else None
     try:
         with np.errstate(all="ignore"):     # overflow in a diverging cell is a status, not noise
-            traj = solve_cell(cell.spec, progress=progress)
+            traj = integrate(cell.spec, progress=progress)
             walls = timed_repeats(cell, traj)
             metrics, skipped = apply(traj, cell.spec.metrics, problem=cell.spec.problem,
                                      families=False)
@@ -94,14 +94,14 @@ def timed_repeats(cell, traj) -> list[float]:
     nothing)."""
     from dataclasses import replace
 
-    from gnibench.suite.cell.solve import solve_cell
+    from gnibench.suite.cell.driver import integrate
 
     walls = [traj.wall_seconds]
     if getattr(cell, "repeat", 1) <= 1 or str(traj.status) != "ok":
         return walls
     bare = replace(cell.spec, reference=None, reference_given=False)
     for k in range(2, cell.repeat + 1):
-        again = solve_cell(bare)
+        again = integrate(bare)
         why = difference(traj, again)
         if why:
             raise NotRepeatable(f"run {k} of {cell.repeat} differs from the first: {why}; the "
