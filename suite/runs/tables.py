@@ -132,7 +132,7 @@ def cell_row(cell, traj=None, metrics=None, status: str = "pending", reason: str
            "dt_out": np.nan if cell.dt_out is None else cell.dt_out,
            "section": getattr(cell, "section", None) or 0, "status": status, "reason": reason,
            "steps": None, "t_final": np.nan, "nfev": np.nan, "njev": np.nan, "samples": None,
-           "integrals": "", "reference": getattr(cell, "reference", None) or "",
+           "integrals": "", "reference": _reference_text(cell),
            "metrics": join_metrics(cell.metrics), "metric_notes": notes,
            "swept": "/".join(getattr(cell, "sweep", ())),
            "setup_method": getattr(cell, "setup_method", cell.method),
@@ -151,6 +151,17 @@ def cell_row(cell, traj=None, metrics=None, status: str = "pending", reason: str
     if metrics is not None:
         row.update(metrics.scalars)
     return row
+
+
+def _reference_text(cell) -> str:
+    """What a cell's global error is measured against, as its trajectory states it (the
+    resolved reference's spec, ``exact`` for the default exact solution): the same text for a
+    cell that has not run or failed as for one that ran, so that both are of one setup."""
+    spec = getattr(cell, "spec", None)
+    ref = getattr(spec, "reference", None) if spec is not None else None
+    if ref is not None and hasattr(ref, "text"):
+        return ref.text()
+    return getattr(cell, "reference", None) or ""
 
 
 def timing_row(cell, traj=None, status: str = "pending", walls: list[float] | None = None
