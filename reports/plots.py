@@ -4,7 +4,7 @@
 Per problem: the invariant errors |I(y(t)) − I(y0)| against t (one panel per integral), with each
 curve's growth exponent in t in the legend (the ``growth`` metric's ``growth_exponent_<I>`` from
 cells.parquet when present, else the same fit, :func:`gnibench.suite.metrics.growth.growth_fit`
-over the metric's default window [0.01 T, T]; none over less than a decade); the global error
+over the metric's default window [0.01 T, T]; none over less than 0.8 decade); the global error
 against t where a reference exists; η(nT) where the ``eta`` metric wrote it; and the Poincaré
 section points of section cells in the section's coordinates.
 
@@ -238,7 +238,7 @@ def time_plots(problem: str, cells, samples, by_cell=None, memo=None, style=None
             zeros += z
         cap = (f"Invariant errors against time ({scale_words}; legend: family, swept value, "
                f"[cell]" + (", growth exponent in t of the error envelope fitted over [0.01 T, T]"
-                            ", none over less than a decade" if one else "; the growth "
+                            ", none over less than 0.8 decade" if one else "; the growth "
                             "exponents in t are in the table of cells") + ").")
         cap += f" {zeros} exact zeros are not drawn." if zeros else ""
         out.append(("invariants", page_plot(panels, cols=1 if one else 2, panel_height=3.2,

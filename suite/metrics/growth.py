@@ -25,9 +25,11 @@ from gnibench.suite.metrics.invariants import invariant_errors
 
 GLOBAL = "global"
 FIT_POINTS = 64           # log-spaced times at which the envelope enters the exponent fit
-#: (choice) a growth exponent is fitted over at least one decade of t and three samples; over
-#: less, a slope of log envelope against log t says nothing about t^p (NaN, with the reason)
-MIN_DECADES = 1.0
+#: (choice) a growth exponent is fitted over samples spanning at least 0.8 of a decade of t (a
+#: factor 6.3; a window of one decade, [T/10, T], sampled at whole periods from the fourth of 30
+#: passes) and at least three samples; over less, a slope of log envelope against log t says
+#: nothing about t^p (NaN, with the reason)
+MIN_DECADES = 0.8
 MIN_SAMPLES = 3
 
 
@@ -198,7 +200,7 @@ growth = Metric(
     columns=(("envelope_<X>", "max_{s<=t} |err_X(s)| (NaN counts as infinite)"),),
     scalars=(("growth_exponent_<X>", ("least-squares slope of log envelope vs log t over the window "
                                      "(inf: diverged; NaN: fewer than 3 samples or less than "
-                                     "a decade of t)")),
+                                     "0.8 of a decade of t)")),
              ("growth_reason_<X>", "why growth_exponent_<X> is NaN (\"\" when it is not)"),
              ("drift_<X>", ("slope s of the least-squares line err_X = m + s t over the window, "
                            "per unit time")),
