@@ -7,6 +7,9 @@ tables themselves (``cells``, ``samples``, ``timings`` DataFrames as ``gnibench 
 them). They return a :class:`matplotlib.figure.Figure` on matplotlib's Agg canvas (no pyplot, no
 window): show it in a notebook as the cell's value, or save it with ``fig.savefig(path)``.
 
+A family keeps its colour and marker across the figures of a session, as across the figures of
+a report (one :class:`gnibench.reports.palette.Palette` for the module).
+
 The options are those of an experiment file's ``[report]`` section
 (:mod:`gnibench.suite.runs.report_schema`), checked the same way: one
 :class:`gnibench.UserError` line for a bad one.
@@ -18,6 +21,16 @@ from pathlib import Path
 from gnibench.suite.foundation.errors import UserError
 
 __all__ = ["global_error", "invariant_errors", "work_precision"]
+_PALETTE: list = []
+
+
+def _palette():
+    """The session's palette: a family met again keeps its style."""
+    if not _PALETTE:
+        from gnibench.reports.palette import Palette
+
+        _PALETTE.append(Palette())
+    return _PALETTE[0]
 
 
 class _Tables:
@@ -125,7 +138,7 @@ def work_precision(result, *, problem: str | None = None, horizon: float | None 
     >>> sorted(t.get_text() for t in fig.legends[0].get_texts())[:2]
     ['Pareto front (least cost per accuracy)', 'dopri5']
     """
-    from gnibench.reports.palette import Palette, styles
+    from gnibench.reports.palette import styles
     from gnibench.reports.plots import brief, problem_id_of
     from gnibench.reports.render import figure
     from gnibench.reports.results import timing_stats
@@ -148,7 +161,7 @@ def work_precision(result, *, problem: str | None = None, horizon: float | None 
     wall_ms = {c: v[0] * 1e3 for c, v in timing_stats(tables.timings).items()}
     title = f"{brief(name, problem_id_of(name, ctx))}: work-precision" + \
         (f" ({context})" if context else "")
-    plot, _ = wp_plot(title, ctx, wall_ms, styles(part, Palette()), family_names(ctx), options)
+    plot, _ = wp_plot(title, ctx, wall_ms, styles(part, _palette()), family_names(ctx), options)
     if plot is None:
         raise UserError(f"no error measure to draw for {name}: the cells have no global error "
                         f"and no integral error")
@@ -156,7 +169,7 @@ def work_precision(result, *, problem: str | None = None, horizon: float | None 
 
 
 def _time_figure(kind: str, result, problem, cells, family, time_axis, error_axis):
-    from gnibench.reports.palette import Palette, styles
+    from gnibench.reports.palette import styles
     from gnibench.reports.plots import time_plots
     from gnibench.reports.render import figure
 
@@ -165,7 +178,7 @@ def _time_figure(kind: str, result, problem, cells, family, time_axis, error_axi
     tables = _Tables(result)
     name, part = tables.problem(problem)
     ps = tables.samples[tables.samples["cell"].isin(part["cell"])]
-    plots = time_plots(name, part, ps, style=styles(part, Palette()), options=options)
+    plots = time_plots(name, part, ps, style=styles(part, _palette()), options=options)
     if not plots:
         raise UserError(f"nothing to draw: the chosen cells of {name} have no "
                         f"{'integral errors' if kind == 'invariants' else 'global error'}")
