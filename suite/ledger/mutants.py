@@ -24,7 +24,7 @@ replacement, what it does and why it is plausible. For each mutant, :func:`run_m
 The unmutated baseline runs first, through the same path. The result, ``<out>/mutants.json``
 (score, date, and per mutant the claims and tests that killed it; rewritten after every mutant,
 so an interrupted campaign keeps what it measured, with ``complete`` false), is what the report's ledger page and
-the README show; the survivors are the ledger's known blind spots (each catalog entry may say
+the documentation show; the survivors are the ledger's known blind spots (each catalog entry may say
 why it survives, ``blind_spot``).
 """
 from __future__ import annotations

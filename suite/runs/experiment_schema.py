@@ -91,6 +91,10 @@ def _vary(table: dict) -> dict[str, dict[str, list[str]]]:
             if not isinstance(values, list) or not values or len(values) > MAX_ITEMS:
                 raise ValueError(f"{here}: bad value {values!r}; allowed: a non-empty list of "
                                  f"at most {MAX_ITEMS} values")
+            if option in out.get(target, {}):       # vary.h and vary.method.h: one option
+                raise ValueError(f"{here}: the option {option!r} of the {target} is varied twice "
+                                 f"(vary.{option} and vary.method.{option} name the same option); "
+                                 f"allowed: one list per option")
             out.setdefault(target, {})[option] = [value_text(v, here) for v in values]
     return out
 
@@ -251,7 +255,7 @@ class ExperimentFile(Common):
     scale: TopScales | None = key(None, "[scale.quick]: the top level at another scale")
     figure: Figure | None = key(None, "a figure or table of a seed ([figure])")
     load: Annotated[list[NonEmptyLine], Field(max_length=64)] = key(
-        [], "user definitions loaded before the cells are read (README, User definitions)",
+        [], "user definitions loaded before the cells are read (docs: reference, User definitions)",
         "a list of paths of definitions files, relative to the experiment file")
 
     @model_validator(mode="after")
