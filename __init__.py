@@ -21,7 +21,7 @@ __all__ = ["RunResult", "Trajectory", "UserError", "list_methods", "list_metrics
            "list_problems", "load", "report", "reproduce", "run", "solve", "verify"]
 _SUBPACKAGES = ("methods", "problems", "reports", "suite")
 #: modules of the API under their own name: ``gnibench.plot.work_precision(result)``
-_MODULES = {"plot": "gnibench.reports.plot_api"}
+_MODULES = {"plot": "gnibench.plot"}
 #: names of earlier releases that Python can still point to (``gnibench.methods()`` and
 #: ``gnibench.problems()`` cannot: those names are the subpackages, and calling a module raises
 #: Python's own TypeError)

@@ -210,7 +210,7 @@ def invariant_errors(result, *, problem: str | None = None, cells="auto",
     Returns
     -------
     matplotlib.figure.Figure
-        |I(y(t)) − I(y0)| against t; each curve labelled by its family, swept value and cell.
+        ``|I(y(t)) − I(y0)|`` against t; each curve labelled by its family, swept value and cell.
 
     Raises
     ------
@@ -234,7 +234,7 @@ def invariant_errors(result, *, problem: str | None = None, cells="auto",
 
 def global_error(result, *, problem: str | None = None, cells="auto",
                  family: str | None = None, time_axis: str = "auto", error_axis: str = "log"):
-    """The global error |y(t) − y_ref(t)| against time, as in the report.
+    """The global error ``|y(t) − y_ref(t)|`` against time, as in the report.
 
     Parameters
     ----------

@@ -26,7 +26,7 @@ def problem_section(problem: str, part, samples, img_dir: Path, prefix: str, slu
                     res, thresholds, palette: Palette, options: dict) -> dict:
     """The content of one problem's section (``part``: its cells, with the columns of
     :func:`gnibench.reports.setups.add_setups`); its figures' drawing is appended to ``jobs``."""
-    from gnibench.reports.pages import cells_table, league_tables
+    from gnibench.reports.tables import cells_table, league_tables
 
     stats = res.wall_stats()
     wall = {c: v[0] for c, v in stats.items()}
@@ -76,7 +76,7 @@ def headline(ctx, wall: dict[int, float], names: dict, target: float, context: s
     """The cheapest family of a context to reach ``target`` in its league measure: {"text",
     "rank"} ("rank" False when no family reaches it or nothing can be ranked)."""
     from gnibench.reports import league
-    from gnibench.reports.pages import num
+    from gnibench.reports.tables import num
 
     column, words = league.accuracy_column(ctx)
     if not column:

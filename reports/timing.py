@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 from gnibench.reports.drawing import Job
-from gnibench.reports.pages import num
+from gnibench.reports.tables import num
 from gnibench.reports.layout import Figure, margins
 from gnibench.reports.render import Panel, Plot, Series
 from gnibench.suite.foundation.benchmarks import load_run, runs

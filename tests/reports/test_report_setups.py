@@ -261,3 +261,47 @@ def test_a_nondeterministic_cell_is_an_error(tmp_path, monkeypatch):
                                     "sample 10")
     assert "\n" not in row["reason"]
     assert np.isnan(pd.read_parquet(out / "timings.parquet")["wall_seconds"].iloc[0])
+
+
+def test_the_api_gives_the_same_tables_and_figures(run):
+    """The held-out experiment through the API (``gnibench.run`` on the same file and output,
+    its cells reused): the same cells table as ``gnibench run`` wrote, the order's NA with its
+    reason, and the plot helpers' figures with one legend entry per family of a horizon."""
+    import gnibench
+    from gnibench.suite.cell.user.loader import loaded, unload
+
+    before = set(loaded())
+    try:
+        res = gnibench.run(run.parent / "exp.toml", output=run, jobs=1)
+    finally:
+        for path in set(loaded()) - before:
+            unload(path)
+    disk = pd.read_parquet(run / "cells.parquet")
+    pd.testing.assert_frame_equal(res.cells.reset_index(drop=True), disk.reset_index(drop=True))
+    rk4 = res.cells[res.cells["base_method"] == "rk4"]
+    assert rk4["order_global"].isna().all()
+    assert rk4["order_reason_global"].str.contains("3 needed").all()
+    fig = gnibench.plot.work_precision(res, horizon=T)
+    labels = {t.get_text() for legend in fig.legends for t in legend.get_texts()}
+    assert {"dopri5", "rk4", "dop853 (atol swept)", "dop853 (atol=1e-12)"} <= labels, labels
+    assert not any("170" in label for label in labels)
+    fig = gnibench.plot.global_error(res, family="rk4", time_axis="linear")
+    assert fig.axes[0].get_xscale() == "linear"
+
+
+def test_gnibench_plot_is_an_importable_module():
+    """``import gnibench.plot`` and ``from gnibench.plot import ...`` work as the attribute
+    does (the docs build imports the module to document it), and ``import gnibench`` stays
+    without matplotlib."""
+    import subprocess
+    import sys
+
+    code = ("import sys, gnibench\n"
+            "assert 'matplotlib' not in sys.modules\n"
+            "import gnibench.plot\n"
+            "from gnibench.plot import global_error, invariant_errors, work_precision\n"
+            "assert gnibench.plot.work_precision is work_precision\n"
+            "print(sorted(gnibench.plot.__all__))\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "['global_error', 'invariant_errors', 'work_precision']"

@@ -322,3 +322,35 @@ def test_the_chart_colour_bar_shows_the_problems_charts_only():
     points_rgb = points.to_rgba(points.get_array())[:, :3]
     assert np.allclose(points_rgb, [tab10[int(k) - 1] for k in charts])
     plt.close(fig)
+
+
+def test_the_index_badge_tells_complete_failures_and_incomplete(tmp_path):
+    """The index card's badge: ``complete`` (every cell ok), ``complete, with failures`` (a cell
+    ended otherwise), ``incomplete`` (the tables of an interrupted run: metadata complete false)."""
+    import shutil
+
+    import pyarrow.parquet as pq
+
+    path = tmp_path / "t.toml"
+    path.write_text('name = "t"\ntitle = "T"\nreference = "r"\nt_end = 10.0\n'
+                    '[[cells]]\nproblems = ["pendulum"]\n'
+                    'methods = ["dopri5:max_steps=3", "rk4:h=0.1"]\n')
+    assert main(["run", str(path), "-o", str(tmp_path / "a"), "-j", "1", "--no-report"]) == 0
+    build_site([tmp_path / "a"], tmp_path / "s1")
+    index = (tmp_path / "s1" / "index.html").read_text()
+    assert '<span class="badge partial">complete, with failures: 1 max_steps, 1 ok</span>' in index
+    shutil.copytree(tmp_path / "a", tmp_path / "b")
+    table = pq.read_table(tmp_path / "b" / "cells.parquet")
+    meta = json.loads(table.schema.metadata[b"gnibench"])
+    meta.update(complete=False, cells_done=1, cells_total=2)
+    pq.write_table(table.replace_schema_metadata(
+        {**table.schema.metadata, b"gnibench": json.dumps(meta).encode()}),
+        tmp_path / "b" / "cells.parquet")
+    build_site([tmp_path / "b"], tmp_path / "s2")
+    index = (tmp_path / "s2" / "index.html").read_text()
+    assert '<span class="badge warn">incomplete: 1 of 2 cells done</span>' in index
+    assert "badge ok" not in index and "badge partial" not in index
+    path.write_text(path.read_text().replace('"dopri5:max_steps=3", ', ""))
+    assert main(["run", str(path), "-o", str(tmp_path / "c"), "-j", "1", "--no-report"]) == 0
+    build_site([tmp_path / "c"], tmp_path / "s3")
+    assert '<span class="badge ok">complete</span>' in (tmp_path / "s3" / "index.html").read_text()
