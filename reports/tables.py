@@ -61,7 +61,8 @@ def cells_table(part, samples, wall: dict[int, tuple], compile_s: dict[int, floa
     has_global = part["final_global_error"].notna().any()
     extra = [c for c in part.columns if c not in FIXED and not c.startswith("max_abs_err_")
              and not c.startswith(QUIET) and part[c].notna().any()
-             and not (part[c].astype(str) == "").all()]
+             and not (part[c].astype(str) == "").all()
+             and not (c == "section" and (part[c].fillna(0) == 0).all())]    # no section cells
     header = ["cell", "method", "family", "swept", "status", "horizon", "every", "t reached",
               "steps", "nfev", "run ms (fastest)", "median ms, spread", "compile s"]
     header += [f"max |err {i}|" for i in errs] + [f"growth exp. {i}" for i in errs]
