@@ -25,7 +25,10 @@ import numpy as np
 DPI = 100
 #: glyphs unhinted: a fifth of the drawing is FreeType's TrueType hinting interpreter, and at
 #: 100 dpi unhinted text is as legible (slightly softer)
-RC = {"text.hinting": "no_hinting"}
+RC = {"text.hinting": "no_hinting",
+      # readable at the page's width (a figure is shown at its own size: reports/layout.py)
+      "font.size": 10, "axes.labelsize": 10.5, "xtick.labelsize": 9.5, "ytick.labelsize": 9.5,
+      "legend.fontsize": 9, "axes.titlesize": 11}
 
 
 @dataclass
@@ -213,12 +216,28 @@ def render(plot: Plot, path: Path) -> None:
         _render(plot, path)
 
 
+def figure(plot: Plot):
+    """``plot`` as a matplotlib Figure, with the report's styles (:data:`RC`)."""
+    import matplotlib
+
+    with matplotlib.rc_context(RC):
+        return draw_figure(plot)
+
+
 def _render(plot: Plot, path: Path) -> None:
+    canvas = draw_figure(plot).canvas
+    canvas.draw()
+    _write_png(canvas, path)
+
+
+def draw_figure(plot: Plot):
+    """``plot`` drawn on a new matplotlib Figure (on an Agg canvas; no pyplot): what
+    :func:`render` writes, and what the plot helpers of ``gnibench.plot`` return."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
     fig = Figure(figsize=plot.size, dpi=DPI)
-    canvas = FigureCanvasAgg(fig)
+    FigureCanvasAgg(fig)
     axes = fig.subplots(plot.rows, plot.cols, squeeze=False).ravel()
     fig.subplots_adjust(**plot.adjust)
     for ax in axes[len(plot.panels):]:
@@ -231,15 +250,14 @@ def _render(plot: Plot, path: Path) -> None:
         handles, labels = [], []
         for ax in axes:
             for h, lab in zip(*ax.get_legend_handles_labels()):
-                if lab not in labels:
+                if lab not in labels and not lab.startswith("_"):
                     handles.append(h)
                     labels.append(lab)
         if handles:
             fig.legend(handles, labels, **plot.legend)
     for ax in fig.axes:
         _ticks(ax)
-    canvas.draw()
-    _write_png(canvas, path)
+    return fig
 
 
 def _write_png(canvas, path: Path) -> None:

@@ -122,6 +122,9 @@ def _parser() -> argparse.ArgumentParser:
                    help="ignore the cells stored by earlier runs in the output directory")
     r.add_argument("--scale", default="paper", metavar="paper|quick",
                    help="the experiment's paper scale (default) or its shortened quick scale")
+    r.add_argument("--repeat", type=option("int", "--repeat"), default=None, metavar="N",
+                   help="run each cell's timed integration N times after the warm-up (min, "
+                        "median and spread in timings.parquet; default: the file's repeat, else 1)")
     _load_option(r)
 
     from gnibench.suite.cli.reproduce import add_parser
@@ -248,7 +251,7 @@ def _run_with(a, pool) -> int:
         out = run_experiment(a.experiment, a.output, jobs=a.jobs, executor=a.executor,
                              scheduler=a.scheduler, fresh=a.fresh, summarize=render_summary,
                              scale=a.scale, started=None if a.no_report else drawers.start,
-                             pool=pool)
+                             pool=pool, repeat=a.repeat)
         if not a.no_report:
             from gnibench.reports.site import build_site
 

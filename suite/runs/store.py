@@ -75,6 +75,8 @@ def cell_key(cell) -> str:
         doc["reference"] = cell.reference
     if getattr(cell, "section", None) is not None:       # crossings instead of samples
         doc["section"] = cell.section
+    if getattr(cell, "repeat", 1) > 1:                   # timed N times: another timings row
+        doc["repeat"] = cell.repeat
     spec = getattr(cell, "spec", None)
     defs = [] if spec is None else [r.definition for r in (spec.problem.record,
                                                             spec.method.base.record) if r.definition]

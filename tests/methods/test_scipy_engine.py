@@ -140,11 +140,12 @@ def test_every_work_precision_experiment_has_the_six_solvers():
 
 def test_work_precision_report_shows_the_solvers(tmp_path):
     """A tiny work-precision run: scipy's DOP853 beside ours, ranked by nfev in the league table,
-    drawn as an adaptive external engine (triangles) on the nfev and wall-time panels."""
+    a family of its own with its own colour and marker on the nfev and wall-time panels."""
     import re
 
     import pandas as pd
     from gnibench.reports.palette import styles
+    from gnibench.reports.setups import add_setups
     from gnibench.reports.site import build_site
     from gnibench.suite.runs.runner import run_experiment
 
@@ -161,8 +162,13 @@ def test_work_precision_report_shows_the_solvers(tmp_path):
     ours = cells[cells["family"] == "scipy-dop853"]
     assert len(ours) == 2 and ours["adaptive"].all() and (ours["method_kind"] == "external").all()
     assert (ours["sweep"] == "rtol").all() and ours["nfev"].notna().all()
-    style = styles(cells)
-    assert style["scipy-dop853"]["marker"] == "^" and style["dop853"]["marker"] == "o"
+    families = add_setups(cells)
+    style = styles(families)
+    first = families.drop_duplicates("setup")
+    assert list(first["family"]) == ["dop853", "scipy-dop853"]
+    ours_style, scipy_style = (style[int(s)] for s in first["setup"])
+    assert ours_style["color"] != scipy_style["color"]
+    assert ours_style["marker"] != scipy_style["marker"]
     build_site([out], tmp_path / "site", thresholds=(1e-6,))
     html = (tmp_path / "site" / "wp-tiny-scipy.html").read_text()
     rows = re.findall(r"<tr>\s*<td>([^<]*)</td><td><code>([^<]*)</code></td>", html)
