@@ -3,7 +3,8 @@
 cosmic-ray mutates one file of the package copy in place and runs this command: it finds the
 mutated file (the newest .py of the package), selects the test files whose imports reach it
 (gnibench.suite.ledger.importers: the reverse import graph, the same selection as
-``gnibench verify --mutants``), nearest first, at import distance <= MAX_DISTANCE, and runs
+``gnibench verify --mutants``), nearest first, at import distance <= MAX_DISTANCE (or the nearest
+ones, when none is that near), and runs
 pytest on them with -x, on one worker, under LIMIT seconds. Exit 0: every selected test passed
 (the mutant survived); 1: a test failed (killed); 3: the limit was reached without a failure
 (logged as "limit": neither killed nor shown to survive). One JSON line per mutant goes to
@@ -36,7 +37,9 @@ def main() -> int:
     file = mutated_file()
     graph = importers.import_graph(str(ROOT))
     dist = importers.importers(graph, importers.module_of(file))
-    tests = [t for t in importers.tests_seeing(ROOT, file) if dist.get(t, 99) <= MAX_DISTANCE]
+    seeing = importers.tests_seeing(ROOT, file)
+    cut = max([MAX_DISTANCE] + [dist[t] for t in seeing[:1]])    # at least the nearest tests
+    tests = [t for t in seeing if dist.get(t, 99) <= cut]
     env = {**os.environ, "PYTHONPATH": str(ROOT.parent)}
     start = time.perf_counter()
     cmd = [sys.executable, "-m", "pytest", "-q", "-x", "-p", "no:cacheprovider", "-m", "not slow",

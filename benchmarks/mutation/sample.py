@@ -15,8 +15,12 @@ from cosmic_ray.work_item import WorkerOutcome, WorkResult
 
 
 def package(path: str) -> str:
+    """suite/runs, suite/metrics, suite/api, methods/engines (with methods/external.py and
+    methods/scipy_methods.py), reports."""
     parts = path.split("/")
-    return "/".join(parts[:2]) if parts[0] in ("suite", "methods") else parts[0]
+    if parts[0] == "methods":
+        return "methods/engines"
+    return "/".join(parts[:2]) if parts[0] == "suite" else parts[0]
 
 
 def main(session: str, n: int, seed: int) -> None:

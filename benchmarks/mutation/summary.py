@@ -1,0 +1,56 @@
+"""Summarise a cosmic-ray session into benchmarks/mutation/cosmic-ray-<date>.json (README.md).
+
+``python summary.py SESSION.sqlite RUN_LOG.jsonl OUT.json COMMIT``: per package, the mutants
+cosmic-ray generated, how many were sampled, killed, survived, or not settled (the test command's
+time limit reached without a failure; cosmic-ray counts a timeout as killed, we do not), and
+every survivor with its diff.
+"""
+from __future__ import annotations
+
+import json
+import sys
+import time
+from collections import defaultdict
+
+from cosmic_ray.work_db import WorkDB, use_db
+from cosmic_ray.work_item import TestOutcome, WorkerOutcome
+from sample import package
+
+
+def main(session: str, log: str, out: str, commit: str) -> None:
+    runs = [json.loads(line) for line in open(log, encoding="utf-8") if line.strip()]
+    packages = defaultdict(lambda: {"mutants": 0, "sampled": 0, "killed": 0, "survived": 0,
+                                    "unsettled": 0})
+    survivors = []
+    with use_db(session, WorkDB.Mode.open) as db:
+        items = {w.job_id: w for w in db.work_items}
+        for w in items.values():
+            packages[package(str(w.mutations[0].module_path))]["mutants"] += 1
+        for job_id, result in db.results:
+            if result.worker_outcome == WorkerOutcome.SKIPPED:
+                continue
+            m = items[job_id].mutations[0]
+            s = packages[package(str(m.module_path))]
+            s["sampled"] += 1
+            limit = "LIMIT" in (result.output or "") or '"outcome": "limit"' in (result.output or "")
+            if limit:
+                s["unsettled"] += 1
+            elif result.test_outcome == TestOutcome.SURVIVED:
+                s["survived"] += 1
+                survivors.append({"file": str(m.module_path), "line": m.start_pos[0],
+                                  "operator": m.operator_name, "diff": result.diff})
+            elif result.test_outcome == TestOutcome.KILLED:
+                s["killed"] += 1
+            else:
+                s["unsettled"] += 1
+    doc = {"tool": "cosmic-ray", "date": time.strftime("%Y-%m-%d"), "commit": commit,
+           "selection": "test files whose imports reach the mutated file, import distance <= 2, "
+                        "pytest -x, one process, 420 s limit (benchmarks/mutation/run_selected.py)",
+           "packages": dict(sorted(packages.items())), "survivors": survivors, "runs": runs}
+    with open(out, "w", encoding="utf-8") as f:
+        json.dump(doc, f, indent=1)
+        f.write("\n")
+
+
+if __name__ == "__main__":
+    main(*sys.argv[1:5])
