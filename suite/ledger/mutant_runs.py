@@ -85,6 +85,11 @@ def _junit(path: Path) -> tuple[list[str], dict[str, float]]:
         return failed, per_file
     for case in root.iter("testcase"):
         classname, name = case.get("classname", ""), case.get("name", "")
+        if not classname:                     # a module that failed to import: the whole file
+            file = name.replace(".", "/") + ".py"
+            if case.find("failure") is not None or case.find("error") is not None:
+                failed.append(file)
+            continue
         parts = classname.split(".")
         # classname "tests.runs.test_runner" (or "...test_runner.TestClass"): the file
         k = next((i for i, p in enumerate(parts) if p.startswith("test_")), len(parts) - 1)

@@ -26,9 +26,11 @@ held-out ``[[mutant]]`` entries has the same schema. For each mutant, :func:`run
    overruns its time limit, FACTOR times the baseline's time plus SLACK
    (:mod:`.mutant_runs`; an overrun where the campaign's cap cut that limit is inconclusive).
 
-The unmutated baseline runs first, through the same path, with the complete test suite (the
-tests' durations set the time limits; a test that fails on the baseline is deselected from every
-mutant's run and listed in the result). The result, ``<out>/mutants.json`` (score, date, commit,
+The unmutated baseline's ledger runs first, through the same path. A test that fails against a
+mutant is run again on the baseline's copy: it kills only when it passes there (a test that fails
+unmutated is left out of every later mutant's run and listed in the result). The tests' time
+limits come from their measured durations (``tests/durations.json``; without it a test phase's
+overrun is inconclusive). The result, ``<out>/mutants.json`` (score, date, commit,
 and per mutant what killed it and the tests selected; rewritten after every mutant, so an
 interrupted campaign keeps what it measured, with ``complete`` false), is what the report's ledger
 page and the docs' page on mutation testing show; the survivors are the verification's known
@@ -37,24 +39,17 @@ blind spots (each catalog entry may say why it survives, ``blind_spot``).
 from __future__ import annotations
 
 import json
-import os
 import shutil
 import subprocess
-import sys
 import time
 from dataclasses import MISSING, asdict, dataclass, field, fields
 from importlib import resources
 from pathlib import Path
 
 from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.ledger.mutant_copies import (copy_package, env_for, imports_copy, package_root,
+                                                 seed_cache)
 from gnibench.suite.ledger.mutant_runs import FACTOR, SLACK
-
-#: what is not part of the package when it is copied
-IGNORE = shutil.ignore_patterns(".venv", ".git", "__pycache__", "results", ".benchmarks",
-                                "*.egg-info", ".pytest_cache", "build", "dist")
-#: cache subfolders keyed by the hash of their full content (safe to share with a mutant)
-SEEDED = ("kernels", "problems")
-
 
 @dataclass(frozen=True)
 class Mutant:
@@ -121,12 +116,6 @@ def load_catalog(text: str | None = None, source: str = "mutant catalog") -> tup
     return mutants, settings
 
 
-def package_root() -> Path:
-    """The package this module belongs to (suite/ledger/ two levels down): importing the
-    package top would import the API, a floor above the ledger (tests/test_layout.py)."""
-    return Path(__file__).resolve().parents[2]
-
-
 def check(mutant: Mutant, root: Path | None = None) -> str:
     """Why ``mutant`` cannot be applied to the package at ``root`` ("" when it can)."""
     base = (root or package_root()).resolve()
@@ -146,13 +135,6 @@ def check(mutant: Mutant, root: Path | None = None) -> str:
     return ""
 
 
-def copy_package(dest: Path) -> Path:
-    """A copy of the installed package at ``dest/gnibench`` (the import root is ``dest``)."""
-    target = dest / "gnibench"
-    shutil.copytree(package_root(), target, ignore=IGNORE)
-    return target
-
-
 def apply(mutant: Mutant, copy: Path) -> None:
     problem = check(mutant, copy)
     if problem:
@@ -162,56 +144,6 @@ def apply(mutant: Mutant, copy: Path) -> None:
     for original, replacement in mutant.edits():
         text = text.replace(original, replacement)
     path.write_text(text, encoding="utf-8")
-
-
-def _env(import_root: Path, cache: Path) -> dict:
-    env = dict(os.environ)
-    env["PYTHONPATH"] = str(import_root)
-    env["GNIBENCH_CACHE_DIR"] = str(cache)
-    env.pop("PYTEST_ADDOPTS", None)
-    # tests/methods/test_hairer_counts.py compares with Hairer's Fortran in a venv it makes once in the
-    # user's cache (not keyed by content, so not seeded): point the copy at it, else every mutant
-    # would build its own
-    if "GNIBENCH_FORTRAN_SCIPY_PYTHON" not in env:
-        from gnibench.suite.foundation.cache import cache_dir
-
-        fortran = cache_dir() / "scipy-fortran" / "bin" / "python"
-        if fortran.is_file():
-            env["GNIBENCH_FORTRAN_SCIPY_PYTHON"] = str(fortran)
-    return env
-
-
-def _link_or_copy(src: str, dst: str) -> None:
-    try:
-        os.link(src, dst)
-    except OSError:
-        shutil.copy2(src, dst)
-
-
-def _seed_cache(source: Path | None, cache: Path) -> None:
-    """Seed a mutant's own cache with hard links to ``source``'s kernels and problem code. Safe:
-    gnibench and numba write every cache file by writing a new file and renaming it over the
-    old one (never in place), so a write in the mutant's cache never reaches ``source``."""
-    cache.mkdir(parents=True, exist_ok=True)
-    if source is None:
-        return
-    for sub in SEEDED:
-        if (source / sub).is_dir() and not (cache / sub).exists():
-            try:       # a shared cache may change while it is linked: a partial seed is fine,
-                shutil.copytree(source / sub, cache / sub, copy_function=_link_or_copy,
-                                ignore=shutil.ignore_patterns("*.tmp*", ".*"))
-            except shutil.Error:                 # every entry is verified when it is read
-                pass
-
-
-def _imports_copy(import_root: Path, env: dict) -> None:
-    """Refuse to go on unless a subprocess with ``env`` imports the copy (not the installed tree)."""
-    out = subprocess.run([sys.executable, "-c", "import gnibench; print(gnibench.__file__)"],
-                         check=False, env=env, cwd=import_root, capture_output=True, text=True, timeout=120)
-    where = Path(out.stdout.strip() or "?").resolve()
-    if import_root.resolve() not in where.parents:
-        raise UserError(f"the subprocess imports gnibench from {where}, not from the copy in "
-                        f"{import_root}: an editable install shadows PYTHONPATH")
 
 
 @dataclass
@@ -263,8 +195,8 @@ def _phases(plan: Plan, tests: list[str], dist: dict):
 def run_one(mutant: Mutant | None, work: Path, plan: Plan, seed: Path | None,
             baseline: dict | None = None) -> dict:
     """The verification on a copy of the package with ``mutant`` applied (None: the unmutated
-    baseline, which runs every phase to the end with the complete test suite). A mutant's run
-    stops at the first phase that kills it. Returns the raw outcome (see :func:`judge_mutant`)."""
+    baseline, which runs every phase of its plan to the end). A mutant's run stops at the first
+    phase that kills it. Returns the raw outcome (see :func:`judge_mutant`)."""
     from gnibench.suite.ledger import mutant_runs as R
 
     name = mutant.id if mutant else "baseline"
@@ -277,13 +209,13 @@ def run_one(mutant: Mutant | None, work: Path, plan: Plan, seed: Path | None,
     if mutant:
         apply(mutant, copy)
     cache = home / "cache"
-    _seed_cache(seed, cache)
-    env = _env(home, cache)
-    _imports_copy(home, env)
+    seed_cache(seed, cache)
+    env = env_for(home, cache)
+    imports_copy(home, env)
     tests, dist = selection(plan, mutant.file if mutant else None)
     raw = {"id": name, "exit": None, "rows": [], "stderr": "", "tests_failed": [],
            "timeouts": [], "inconclusive": [], "phases": [], "tests_selected": len(tests),
-           "cache": str(cache), "home": str(home), "durations": {}, "ledger_seconds": None}
+           "cache": str(cache), "home": str(home), "ledger_seconds": None}
     for k, (phase, files) in enumerate(_phases(plan, tests, dist)):
         if phase == "ledger":
             lim, sure = R.limit(plan.ledger_seconds, plan.cap)
@@ -293,10 +225,8 @@ def run_one(mutant: Mutant | None, work: Path, plan: Plan, seed: Path | None,
                        ledger_seconds=round(res.seconds, 1))
         else:
             lim, sure = R.limit(R.estimate(files, plan.durations, plan.jobs), plan.cap)
-            res = R.run_tests(copy, env, files, plan.jobs, lim, plan.deselect,
-                              stop_first=mutant is not None, report=home / f"junit{k}.xml",
-                              conclusive=sure)
-            raw["durations"].update(res.durations)
+            res = _confirmed_tests(copy, env, files, plan, lim, sure, home / f"junit{k}.xml",
+                                   baseline)
             if not res.timed_out:
                 raw["tests_failed"] += res.failed
         if res.timed_out:
@@ -308,6 +238,27 @@ def run_one(mutant: Mutant | None, work: Path, plan: Plan, seed: Path | None,
             break
     raw["seconds"] = round(time.perf_counter() - start, 1)
     return raw
+
+
+def _confirmed_tests(copy: Path, env: dict, files: list[str], plan: Plan, lim: float, sure: bool,
+                     report: Path, baseline: dict | None):
+    """A mutant's test phase whose failures are confirmed on the unmutated baseline copy: a test
+    that fails there too is no kill; it is left out (``plan.deselect``, for every later mutant
+    too) and the phase runs again (at most three times)."""
+    from gnibench.suite.ledger import mutant_runs as R
+
+    for _ in range(3):
+        res = R.run_tests(copy, env, files, plan.jobs, lim, plan.deselect, stop_first=True,
+                          report=report, conclusive=sure)
+        if res.timed_out or not res.failed or baseline is None:
+            return res
+        home = Path(baseline["home"])
+        check = R.run_tests(home / "gnibench", env_for(home, Path(baseline["cache"])), res.failed[:1],
+                            1, lim, (), stop_first=True, report=home / "confirm.xml")
+        if not check.failed and check.exit in (0, 5):
+            return res                       # passes unmutated: the mutant killed it
+        plan.deselect = tuple(dict.fromkeys(plan.deselect + tuple(res.failed[:1])))
+    return res
 
 
 def judge_mutant(raw: dict, baseline: dict) -> dict:
@@ -323,6 +274,18 @@ def judge_mutant(raw: dict, baseline: dict) -> dict:
     return {"claims": claims, "tests": list(raw["tests_failed"]), "crash": "; ".join(why),
             "timeout": "; ".join(raw["timeouts"]), "inconclusive": "; ".join(raw["inconclusive"]),
             "killed": bool(claims or raw["tests_failed"] or crash or raw["timeouts"])}
+
+
+def durations(root: Path | None = None) -> dict[str, float]:
+    """Test file (relative to the package root) -> its measured duration in seconds, from
+    ``tests/durations.json`` (pytest --store-durations; {} without it)."""
+    path = (root or package_root()) / "tests" / "durations.json"
+    try:
+        raw = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    return {f"tests/{k}": float(v) for k, v in raw.items()
+            if isinstance(v, (int, float)) and not isinstance(v, bool)}
 
 
 def _document(plan: Plan, results: list[dict], baseline: dict, planned: int) -> dict:
@@ -373,26 +336,21 @@ def run_mutants(mutants: list[Mutant], out: Path, scale: str = "quick", jobs: in
         from gnibench.suite.foundation.cache import cache_dir
 
         baseline_seed = cache_dir()
-    # the baseline runs every test file any mutant will run (all of them unless a list is given)
-    wanted = sorted({t for m in mutants for t in selection(plan, m.file)[0]})
-    base_plan = Plan(scale, jobs, plan.claims, wanted, plan.cap)
-    log(f"gnibench: mutants: baseline (unmutated copy), {scale} scale, {len(wanted)} test files")
-    base = run_one(None, work, base_plan, baseline_seed)
+    # the baseline runs the ledger; a test that fails against a mutant is run again on the
+    # baseline's copy (a kill only when it passes there); the tests' time limits come from their
+    # measured durations (tests/durations.json)
+    log(f"gnibench: mutants: baseline (unmutated copy), {scale} scale")
+    base = run_one(None, work, Plan(scale, jobs, plan.claims, "none", plan.cap), baseline_seed)
     if base["exit"] not in (0, 1) or not base["rows"]:
         raise UserError(f"the unmutated baseline failed ({base['stderr']}); see {base['home']}")
     if base["timeouts"] or base["inconclusive"]:
         raise UserError(f"the unmutated baseline overran the cap of {timeout:.0f} s: "
                         f"{'; '.join(base['timeouts'] + base['inconclusive'])}")
     noisy = sorted(r["id"] for r in base["rows"] if r.get("unexpected"))
-    plan.ledger_seconds, plan.durations = base["ledger_seconds"], base["durations"]
-    plan.deselect = tuple(base["tests_failed"])
-    if plan.deselect:
-        log(f"gnibench: mutants: {len(plan.deselect)} tests fail on the baseline and are left "
-            f"out: {', '.join(plan.deselect[:5])}")
+    plan.ledger_seconds, plan.durations = base["ledger_seconds"], durations()
     baseline = {"exit": base["exit"], "unexpected": noisy, "seconds": base["seconds"],
-                "ledger_seconds": base["ledger_seconds"], "test_files": len(wanted),
-                "tests_seconds": round(sum(base["durations"].values()), 1),
-                "tests_failing": list(plan.deselect),
+                "ledger_seconds": base["ledger_seconds"],
+                "tests_seconds": round(sum(plan.durations.values()), 1), "tests_failing": [],
                 "verdicts": {v: sum(r["verdict"] == v for r in base["rows"])
                              for v in dict.fromkeys(r["verdict"] for r in base["rows"])}}
     results = []
@@ -404,6 +362,7 @@ def run_mutants(mutants: list[Mutant], out: Path, scale: str = "quick", jobs: in
         for key in ("original", "replacement", "more"):
             row.pop(key)
         results.append(row)
+        baseline["tests_failing"] = list(plan.deselect)
         by = ", ".join(verdict["claims"][:6] + verdict["tests"][:3]) or verdict["crash"] \
             or verdict["timeout"]
         log(f"gnibench: mutants: [{k}/{len(mutants)}] {m.id}: "
