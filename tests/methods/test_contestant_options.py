@@ -12,35 +12,18 @@ import math
 
 import numpy as np
 import pytest
-from gnibench.suite.cell.compiled import problem_kernel
 from gnibench.suite.cell.solve import solve
 from gnibench.suite.cell.spec import prepare
-from scipy.integrate import solve_ivp
-from threadpoolctl import threadpool_limits
+from test_scipy_engine import SOLVERS, direct
 
 PERIOD = 2 * math.pi                               # kepler-2d from its default start: a = 1
-SOLVERS = {"rk45": "RK45", "rk23": "RK23", "dop853": "DOP853", "radau": "Radau", "bdf": "BDF",
-           "lsoda": "LSODA"}
 RTOL, ATOL = 1e-5, 1e-9
 
 
 def solve_ivp_directly(solver: str, t_eval, rtol: float, atol: float):
     """solve_ivp on kepler-2d's compiled field (and Jacobian for the implicit solvers)."""
-    bound, _ = prepare("kepler-2d", "rk4")
-    pk = problem_kernel(bound)
-    f, J, par = pk.kernel.base_f, pk.kernel.base_jac, pk.par
-    n = bound.record.dim
-
-    def jac(t, y):
-        out = np.zeros((n, n))
-        J(tuple(y), par, out)
-        return out
-
-    kw = {"jac": jac} if solver in ("Radau", "BDF", "LSODA") else {}
-    y0 = np.array(bound.record.y0(bound.values), dtype=float)
-    with threadpool_limits(1, user_api="blas"):
-        return solve_ivp(lambda t, y: f(tuple(y), par), (0.0, t_eval[-1]), y0, method=solver,
-                         t_eval=t_eval, rtol=rtol, atol=atol, **kw)
+    return direct("kepler-2d", solver, t_eval, rtol, solver in ("Radau", "BDF", "LSODA"),
+                  atol=atol)
 
 
 @pytest.mark.parametrize("name", list(SOLVERS))
