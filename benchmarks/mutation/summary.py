@@ -8,6 +8,7 @@ every survivor with its diff.
 from __future__ import annotations
 
 import json
+import os
 import sys
 import time
 from collections import defaultdict
@@ -44,8 +45,10 @@ def main(session: str, log: str, out: str, commit: str) -> None:
             else:
                 s["unsettled"] += 1
     doc = {"tool": "cosmic-ray", "date": time.strftime("%Y-%m-%d"), "commit": commit,
-           "selection": "test files whose imports reach the mutated file, import distance <= 2, "
-                        "pytest -x, one process, 420 s limit (benchmarks/mutation/run_selected.py)",
+           "selection": ("test files whose imports reach the mutated file, import distance <= "
+                         f"{os.environ.get('MUTATION_MAX_DISTANCE', '2')} (or the nearest), pytest -x, "
+                         f"one process, {os.environ.get('MUTATION_LIMIT', '420')} s limit "
+                         "(benchmarks/mutation/run_selected.py)"),
            "packages": dict(sorted(packages.items())), "survivors": survivors, "runs": runs}
     with open(out, "w", encoding="utf-8") as f:
         json.dump(doc, f, indent=1)
