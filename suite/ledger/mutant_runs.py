@@ -126,14 +126,15 @@ def run_tests(copy: Path, env: dict, tests: list[str], jobs: int, timeout: float
     return Phase(run.returncode, seconds, failed, durations=per_file)
 
 
-def tiers(tests: list[str], distance: dict[str, int]) -> list[list[str]]:
-    """The selected test files in up to three calls of pytest, nearest importers first: those
-    that import the mutated module itself (distance 1), then through one module, then the rest
-    (each call stops at its first failure, and the next call only runs when none failed)."""
-    out = [[t for t in tests if distance.get(t, 9) <= 1],
-           [t for t in tests if distance.get(t, 9) == 2],
-           [t for t in tests if distance.get(t, 9) > 2]]
-    return [t for t in out if t]
+def tiers(tests: list[str], distance: dict[str, int], most: int = 5) -> list[list[str]]:
+    """The selected test files in calls of pytest by import distance, nearest first: those that
+    import the mutated module itself (distance 1), then through one module (2), and so on, the
+    farthest merged into the last of at most ``most`` calls (each call stops at its first
+    failure, and the next only runs when none failed)."""
+    levels = sorted({distance.get(t, 99) for t in tests})
+    groups = [[t for t in tests if distance.get(t, 99) == d] for d in levels[:most - 1]]
+    rest = [t for t in tests if distance.get(t, 99) in levels[most - 1:]]
+    return [g for g in groups + [rest] if g]
 
 
 def estimate(files: list[str], durations: dict[str, float], jobs: int) -> float | None:

@@ -17,7 +17,8 @@ held-out ``[[mutant]]`` entries has the same schema. For each mutant, :func:`run
    own results directory, and checks that a subprocess imports the copy;
 3. runs the whole verification on the copy, in subprocesses, stopping at the first kill: the
    tests that import the mutated module itself (pytest ``-x``), the ledger (``gnibench
-   verify``), then the other tests that can see the mutated file through the modules between
+   verify``), then the other tests that can see the mutated file through the modules between,
+   one pytest call per import distance, nearest first
    (:mod:`.importers`: the reverse import graph of the package and its test modules, computed
    from the source, never a hand-kept list; ``tests = "all"``: the complete test suite);
 4. calls the mutant *killed* when a claim's verdict differs from its expected one (or is

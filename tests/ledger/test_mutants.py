@@ -172,6 +172,8 @@ def test_time_limits_kill_only_when_the_baseline_is_fast():
     assert R.estimate(files, {"tests/a.py": 40.0, "tests/b.py": 20.0}, 2) == 30.0 + R.PYTEST_START
     assert R.estimate(files, {}, 2) is None
     assert R.tiers(["x", "y", "z"], {"x": 1, "y": 2, "z": 5}) == [["x"], ["y"], ["z"]]
+    assert R.tiers(list("abcdef"), dict(zip("abcdef", range(1, 7))), most=3) == [
+        ["a"], ["b"], ["c", "d", "e", "f"]]
 
 
 def test_a_test_that_sees_the_mutant_kills_it(tmp_path):
