@@ -1,7 +1,8 @@
 """Summarise a cosmic-ray session into benchmarks/mutation/cosmic-ray-<date>.json (README.md).
 
 ``python summary.py SESSION.sqlite RUN_LOG.jsonl OUT.json COMMIT``: per package, the mutants
-cosmic-ray generated, how many were sampled, killed, survived, or not settled (the test command's
+cosmic-ray generated, how many of the sample were run (sampled), killed, survived, not settled,
+or not run (an interrupted campaign) (the test command's
 time limit reached without a failure; cosmic-ray counts a timeout as killed, we do not), and
 every survivor with its diff.
 """
@@ -21,12 +22,14 @@ from sample import package
 def main(session: str, log: str, out: str, commit: str) -> None:
     runs = [json.loads(line) for line in open(log, encoding="utf-8") if line.strip()]
     packages = defaultdict(lambda: {"mutants": 0, "sampled": 0, "killed": 0, "survived": 0,
-                                    "unsettled": 0})
+                                    "unsettled": 0, "not run": 0})
     survivors = []
     with use_db(session, WorkDB.Mode.open) as db:
         items = {w.job_id: w for w in db.work_items}
         for w in items.values():
             packages[package(str(w.mutations[0].module_path))]["mutants"] += 1
+        for w in db.pending_work_items:      # sampled, not run yet (an interrupted campaign)
+            packages[package(str(w.mutations[0].module_path))]["not run"] += 1
         for job_id, result in db.results:
             if result.worker_outcome == WorkerOutcome.SKIPPED:
                 continue
