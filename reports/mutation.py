@@ -90,12 +90,13 @@ def comparison_table(docs: dict[str, dict]) -> str:
 
 def cosmic_ray_table(doc: dict) -> str:
     """Per package: mutants generated, sampled, killed, survived, not settled; and the score."""
-    lines = ["| package | mutants | run | killed | survived | not settled | score |",
-             "|---|---|---|---|---|---|---|"]
+    lines = ["| package | mutants | equivalent | run | killed | survived | not settled | score |",
+             "|---|---|---|---|---|---|---|---|"]
     for pkg, s in doc["packages"].items():
         judged = s["killed"] + s["survived"]
         score = f"{100 * s['killed'] / judged:.0f} %" if judged else "–"
-        lines.append(f"| {pkg} | {s['mutants']} | {s['sampled']} | {s['killed']} | "
+        lines.append(f"| {pkg} | {s['mutants']} | {s.get('equivalent', 0)} | {s['sampled']} | "
+                     f"{s['killed']} | "
                      f"{s['survived']} | {s['unsettled']} | {score} |")
     for row in doc.get("survivors", []):
         lines.append("")

@@ -22,7 +22,7 @@ from sample import package
 def main(session: str, log: str, out: str, commit: str) -> None:
     runs = [json.loads(line) for line in open(log, encoding="utf-8") if line.strip()]
     packages = defaultdict(lambda: {"mutants": 0, "sampled": 0, "killed": 0, "survived": 0,
-                                    "unsettled": 0, "not run": 0})
+                                    "unsettled": 0, "not run": 0, "equivalent": 0})
     survivors = []
     with use_db(session, WorkDB.Mode.open) as db:
         items = {w.job_id: w for w in db.work_items}
@@ -32,6 +32,8 @@ def main(session: str, log: str, out: str, commit: str) -> None:
             packages[package(str(w.mutations[0].module_path))]["not run"] += 1
         for job_id, result in db.results:
             if result.worker_outcome == WorkerOutcome.SKIPPED:
+                if result.output == "equivalent: annotation":
+                    packages[package(str(items[job_id].mutations[0].module_path))]["equivalent"] += 1
                 continue
             m = items[job_id].mutations[0]
             s = packages[package(str(m.module_path))]
