@@ -25,8 +25,9 @@ LIMIT = float(os.environ.get("MUTATION_LIMIT", "420"))
 
 
 def mutated_file() -> str:
-    newest = max((p for p in ROOT.rglob("*.py") if "tests" not in p.relative_to(ROOT).parts[:1]
-                  and ".venv" not in p.parts), key=lambda p: p.stat().st_mtime_ns)
+    code = [p for folder in ("suite", "methods", "problems", "reports")
+            for p in (ROOT / folder).rglob("*.py")]
+    newest = max(code, key=lambda p: p.stat().st_mtime_ns)
     return newest.relative_to(ROOT).as_posix()
 
 
