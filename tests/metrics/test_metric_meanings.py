@@ -187,3 +187,16 @@ def test_growth_scalars_are_their_definitions_on_a_drifting_oscillating_error(la
     assert (s["growth_window_start"], s["growth_window_end"]) == (0.25 * T, T)
     env = out.columns["envelope_H"]
     assert np.max(np.abs(env - np.maximum.accumulate(np.abs(err)))) < 1e-15
+
+
+def test_two_samples_are_enough_for_a_precession_rate():
+    """The least-squares slope of two points is the line through them: a cell sampled only at its
+    start and end (every = all its steps) still has a precession rate, (ω1 - ω0) / (t1 - t0)."""
+    prob, t, y = kepler_samples("kepler-2d:e=0.6", periods=1, per_period=8)
+    t2 = t[[0, 3]]
+    phi = np.array([0.0, 0.02])
+    traj = synthetic_trajectory("kepler-2d:e=0.6", t2, turned("kepler-2d", t2, y[[0, 3]], phi))
+    out, skipped = apply(traj, parse_metrics("precession"))
+    assert not skipped
+    assert out.scalars["precession_rate"] == pytest.approx(0.02 / t2[1], rel=1e-12)
+    assert out.scalars["pericenter_shift"] == pytest.approx(0.02, rel=1e-12)
