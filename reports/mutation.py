@@ -56,7 +56,7 @@ def _killer(row: dict) -> str:
     found = [f"claim {c}" for c in row.get("claims", [])[:2]]
     found += [f"`{t.split('[')[0]}`" for t in row.get("tests", [])[:1]]
     if not found and row.get("crash"):
-        found = ["the ledger run failing (" + row["crash"].split(":")[-1].strip()[:80] + ")"]
+        found = ["the ledger run failing (" + re.sub(r"^.*: ", "", row["crash"])[:80] + ")"]
     if not found and row.get("timeout"):
         found = ["a time limit"]
     return ", ".join(found)

@@ -18,6 +18,10 @@ from cosmic_ray.work_db import WorkDB, use_db
 from cosmic_ray.work_item import TestOutcome, WorkerOutcome
 from sample import package
 
+#: tests that failed on the unmutated copy of the package during a campaign (a kill by one of
+#: them is not a kill: counted as not settled), e.g. a lint test that read a file of the copy
+FAILING_UNMUTATED = [t for t in os.environ.get("MUTATION_FAILING_UNMUTATED", "").split(",") if t]
+
 
 def main(session: str, log: str, out: str, commit: str) -> None:
     runs = [json.loads(line) for line in open(log, encoding="utf-8") if line.strip()]
@@ -39,7 +43,8 @@ def main(session: str, log: str, out: str, commit: str) -> None:
             s = packages[package(str(m.module_path))]
             s["sampled"] += 1
             limit = "LIMIT" in (result.output or "") or '"outcome": "limit"' in (result.output or "")
-            if limit:
+            false = any(f in (result.output or "") for f in FAILING_UNMUTATED)
+            if limit or false:
                 s["unsettled"] += 1
             elif result.test_outcome == TestOutcome.SURVIVED:
                 s["survived"] += 1
