@@ -20,7 +20,8 @@ import time
 
 import numpy as np
 import pytest
-from gnibench.suite.cell.driver import UNLIMITED, integrate
+from gnibench.suite.cell.calls import UNLIMITED
+from gnibench.suite.cell.solve import solve
 from gnibench.suite.cell.spec import prepare
 
 PROBLEM = "euler-so4"
@@ -31,11 +32,11 @@ ALL = 10**9                   # crossings asked for: every one up to t_end
 
 
 def _plain(p, m, t_end):
-    return integrate(p, m, t_end=t_end, every=UNLIMITED, budget=None)
+    return solve(p, m, t_end=t_end, every=UNLIMITED, budget=None, reference="none")
 
 
 def _section(p, m, t_end):
-    return integrate(p, m, t_end=t_end, section=ALL, budget=None)
+    return solve(p, m, t_end=t_end, section=ALL, budget=None)
 
 
 def _best(fn, rounds=3):

@@ -24,7 +24,7 @@ from gnibench.reports.results import load_results
 
 def retime(experiment: str, cells, rounds: int, worst: float) -> dict[tuple[str, str], float]:
     """(problem, method) -> the minimum integration wall time of ``rounds`` serial solves."""
-    from gnibench.suite.cell.solve import solve_cell
+    from gnibench.suite.cell.driver import integrate
     from gnibench.suite.runs.experiment import load_experiment
 
     ok = {(str(r.problem), str(r.method)) for r in cells.itertuples(index=False)
@@ -34,7 +34,7 @@ def retime(experiment: str, cells, rounds: int, worst: float) -> dict[tuple[str,
     best = {(c.problem, c.method): math.inf for c in todo}
     for _ in range(rounds):
         for c in todo:
-            wall = solve_cell(c.spec).wall_seconds
+            wall = integrate(c.spec).wall_seconds
             best[(c.problem, c.method)] = min(best[(c.problem, c.method)], wall)
     return best
 

@@ -1,6 +1,6 @@
 """League tables: the methods of one problem ranked by the cost to reach a stated accuracy.
 
-For each method family (:mod:`gnibench.reports.families`) and a threshold ε on an error measure
+For each method family (the cells' column ``family``) and a threshold ε on an error measure
 (``max_global_error`` when the problem's cells have a reference, else ``max_abs_err_<I>`` of its
 first integral), the cost is found along the family's sweep, cells ordered by cost:
 

@@ -16,7 +16,8 @@ from pathlib import Path
 
 from gnibench.reports import league, plots, workprecision
 
-FIXED = {"cell", "group", "label", "problem", "method", "method_kind", "h", "t_end",
+FIXED = {"cell", "group", "label", "problem", "method", "problem_id", "base_method", "modifiers",
+         "method_kind", "h", "t_end",
          "steps_planned", "every", "status", "reason", "steps", "t_final", "nfev", "njev",
          "samples", "integrals", "reference", "metrics", "metric_notes", "final_global_error",
          "max_global_error", "family", "sweep", "sweep_value", "adaptive"}
@@ -172,8 +173,8 @@ def experiment_page(res, img_dir: Path, slug: str, thresholds, jobs) -> dict:
         samples = res.samples()
     except (OSError, ValueError):
         samples = None
-    sections = problem_sections(cells["problem"])
-    page["problem_ids"] = short_problems(cells["problem"])
+    sections = problem_sections(cells)
+    page["problem_ids"] = short_problems(cells)
     for i, problem in enumerate(dict.fromkeys(sections)):
         part = cells[sections == problem]
         prefix = f"{i:02d}-" + re.sub(r"[^A-Za-z0-9._-]+", "_", str(problem))[:40]
@@ -200,34 +201,30 @@ def experiment_page(res, img_dir: Path, slug: str, thresholds, jobs) -> dict:
 MAX_SPECS_PER_PROBLEM = 6
 
 
-def problem_sections(problems):
+def problem_sections(cells):
     """The section of the page each cell goes to: its problem spec, or the bare problem id when
     the experiment runs that problem from more than ``MAX_SPECS_PER_PROBLEM`` specs (the
     initial points of a set, [HLW] Figs 1.1 and 1.3: one section, not one per point)."""
     import pandas as pd
 
-    problems = pd.Series(problems).astype(str)
-    from gnibench.suite.cell.spec import item_id
-
-    ids = problems.map(lambda text: item_id(text, "problem"))
+    problems = cells["problem"].astype(str)
+    ids = cells["problem_id"].astype(str)
     many = {i for i, n in problems.groupby(ids).nunique().items() if n > MAX_SPECS_PER_PROBLEM}
     return pd.Series(problems.where(~ids.isin(many), ids + " (" + problems.groupby(ids)
                                     .transform("nunique").astype(str) + " initial values)"),
                      index=problems.index)
 
 
-def short_problems(problems) -> list[str]:
+def short_problems(cells) -> list[str]:
     """The problems of an experiment as the index card names them: each spec briefly
     (:func:`gnibench.reports.plots.brief`), a problem run from several specs by its id and their
     number (the page itself lists every spec)."""
-    from gnibench.suite.cell.spec import item_id
-
-    specs = list(dict.fromkeys(str(p) for p in problems))
-    ids = [item_id(text, "problem") for text in specs]
+    pairs = dict.fromkeys(zip(cells["problem"].astype(str), cells["problem_id"].astype(str)))
     out = []
-    for pid in dict.fromkeys(ids):
-        mine = [t for t, i in zip(specs, ids) if i == pid]
-        out.append(f"{pid} ({len(mine)} parameter sets)" if len(mine) > 1 else plots.brief(mine[0]))
+    for pid in dict.fromkeys(i for _, i in pairs):
+        mine = [t for t, i in pairs if i == pid]
+        out.append(f"{pid} ({len(mine)} parameter sets)" if len(mine) > 1
+                   else plots.brief(mine[0], pid))
     return out
 
 

@@ -1,8 +1,8 @@
 """Colours, line styles and markers of the report figures: one place, so a method has the same
 colour in every figure of every page.
 
-A method family (:func:`gnibench.reports.families.family_of`, e.g. ``dopri5``, ``rk4+observer:...``)
-gets the colour of its base method (the palette of the seeds' figures,
+A method family (the cells' column ``family``, e.g. ``dopri5``, ``rk4+observer:...``)
+gets the colour of its base method (column ``base_method``) (the palette of the seeds' figures,
 :mod:`gnibench.reports.figures.style`, with a stable hash for methods added later); families that share a base method are told apart by line style, in the order given. The
 marker says how the method chooses its steps and runs: fixed step (square), adaptive (circle),
 external engine (triangle), Python code of the user's (diamond; ``method_kind`` of the cells
@@ -22,28 +22,20 @@ def colour(base: str) -> str:
     return color_of(base)
 
 
-def base_of(family: str) -> str:
-    """The base method id of a family or method spec."""
-    from gnibench.suite.cell.spec import item_id
-
-    return item_id(family, "method")
-
-
-def styles(families: list[str], adaptive: dict[str, bool] | None = None,
-           kinds: dict[str, str] | None = None) -> dict[str, dict]:
-    """matplotlib keyword arguments (``color``, ``linestyle``, ``marker``) for each family, in
-    order: the base method's colour, a new line style for each further family of the same base.
-    ``kinds``: each family's ``method_kind`` (compiled, external, python)."""
-    adaptive, kinds = adaptive or {}, kinds or {}
+def styles(cells) -> dict[str, dict]:
+    """matplotlib keyword arguments (``color``, ``linestyle``, ``marker``) for each family of the
+    cells table, in order: the base method's colour, a new line style for each further family of
+    the same base; the marker from ``method_kind`` (compiled, external, python) and
+    ``adaptive``."""
+    first = cells.drop_duplicates("family")
     seen: dict[str, int] = {}
     out = {}
-    for fam in families:
-        base = base_of(fam)
+    for fam, base, kind, adaptive in zip(first["family"], first["base_method"],
+                                         first["method_kind"], first["adaptive"]):
         k = seen.get(base, 0)
         seen[base] = k + 1
-        kind = kinds.get(fam, "compiled")
         if kind == "compiled":
-            kind = "adaptive" if adaptive.get(fam) else "fixed"
+            kind = "adaptive" if adaptive else "fixed"
         out[fam] = {"color": colour(base), "linestyle": LINESTYLES[k % len(LINESTYLES)],
                     "marker": MARKERS[kind]}
     return out

@@ -43,18 +43,21 @@ def clip(text: str, width: int) -> str:
     return text if len(text) <= width else text[:width - 1] + "…"
 
 
-def brief(problem: str) -> str:
+def brief(problem: str, problem_id: str | None) -> str:
     """A problem spec as a title or an index card names it: as it is up to ``BRIEF`` characters,
-    else by its id (the page's section heading shows the whole spec)."""
-    from gnibench.suite.cell.spec import item_id
-    from gnibench.suite.foundation.errors import UserError
-
+    else by its id (``problem_id``, the cells' column; the page's section heading shows the whole
+    spec); a longer name that is not a spec (``problem_id`` None: a section label such as
+    "id (n initial values)") is clipped."""
     if len(problem) <= BRIEF:
         return problem
-    try:
-        return item_id(problem, "problem")
-    except (UserError, ValueError):          # a section label: "id (n initial values)"
-        return clip(problem, BRIEF)
+    return problem_id if problem_id is not None else clip(problem, BRIEF)
+
+
+def problem_id_of(name: str, cells) -> str | None:
+    """The problem id of a page section named ``name`` when it is one of the cells' problem
+    specs, else None (a section label)."""
+    hit = cells.loc[cells["problem"].astype(str) == name, "problem_id"]
+    return str(hit.iloc[0]) if len(hit) else None
 
 
 def pick_cells(cells) -> tuple[list[int], str]:
@@ -236,9 +239,8 @@ def time_figures(problem: str, cells, samples, out_dir: Path, prefix: str, slug:
     by_cell = trajectories(samples) if by_cell is None else by_cell
     shade = shades(cells)
     ids, note = pick_cells(cells[cells["cell"].isin(traj["cell"].unique())])
-    style = styles(list(dict.fromkeys(cells["family"])),
-                   dict(zip(cells["family"], cells["adaptive"])),
-                   dict(zip(cells["family"], cells["method_kind"])))
+    style = styles(cells)
+    pid = problem_id_of(problem, cells)
     integrals = [i for i in dict.fromkeys("/".join(cells["integrals"].fillna("")).split("/")) if i]
     integrals = [i for i in integrals if f"err_{i}" in traj and traj[f"err_{i}"].notna().any()]
     if ids and integrals:
@@ -247,7 +249,7 @@ def time_figures(problem: str, cells, samples, out_dir: Path, prefix: str, slug:
             panel, z = _panel(cells, by_cell, ids, f"err_{name}", style, name, memo=memo,
                               shade=shade)
             panel.ylabel = f"|{name}(y(t)) − {name}(y0)|"
-            panel.title = f"{brief(problem)}: error of {name}"
+            panel.title = f"{brief(problem, pid)}: error of {name}"
             panels.append(panel)
             zeros += z
         cap = ("Invariant errors against time (log scale; legend: growth exponent in t of the "
@@ -260,50 +262,49 @@ def time_figures(problem: str, cells, samples, out_dir: Path, prefix: str, slug:
                           shade=shade)
         panel.ylabel = "global error |y − y_ref|"
         refs = sorted({r for r in cells["reference"].fillna("") if r}) if "reference" in cells else []
-        panel.title = f"{brief(problem)}: global error" + (f" (against {', '.join(refs)})" if refs else "")
+        panel.title = f"{brief(problem, pid)}: global error" + (f" (against {', '.join(refs)})" if refs else "")
         add(f"{prefix}-global-error.png", _grid([panel]), f"{problem}: global error",
             f"Global error against time (legend: its growth exponent in t). {note}".strip())
     if ids and "eta" in traj and traj["eta"].notna().any():
         panel, _ = _panel(cells, by_cell, ids, "eta", style, "eta", with_exponent=False,
                           shade=shade)
         panel.ylabel = "η(nT) (rad)"
-        panel.title = f"{brief(problem)}: η(nT), angle between q(0) and q(nT)"
+        panel.title = f"{brief(problem, pid)}: η(nT), angle between q(0) and q(nT)"
         add(f"{prefix}-eta.png", _grid([panel]), f"{problem}: η(nT)",
             "η(nT) at whole periods ([B] §5.2, Fig 12), log scale.")
     if "crossing" in samples and samples["crossing"].notna().any():
         plot = section_plot(problem, cells, samples[samples["crossing"].notna()], style)
         if plot is not None:
-            coords = section_coords(str(cells["problem"].iloc[0]))
+            coords = section_coords(str(cells["problem_id"].iloc[0]))
             add(f"{prefix}-sections.png", plot, f"{problem}: Poincaré section",
                 f"Section crossings in the section's coordinates ({coords[0]}, {coords[1]}), "
                 "one panel per section cell.")
     return out
 
 
-def _section(problem: str):
-    """The (first) Poincaré section of a problem (``problem``: a spec), or None."""
+def _section(problem_id: str):
+    """The (first) Poincaré section of a problem (by its id), or None."""
     from gnibench.problems import REGISTRY
-    from gnibench.suite.cell.spec import item_id
 
-    record = REGISTRY.get(item_id(problem, "problem"))
+    record = REGISTRY.get(problem_id)
     return record.sections[0] if record is not None and record.sections else None
 
 
-def section_charts(problem: str) -> int:
+def section_charts(problem_id: str) -> int:
     """How many charts a problem's section points are labelled with (0: none or unknown)."""
-    section = _section(problem)
+    section = _section(problem_id)
     return int(section.charts) if section is not None else 0
 
 
-def section_coords(problem: str) -> tuple[str, ...]:
-    """The recorded coordinates of a problem's (first) Poincaré section (``problem``: a spec)."""
-    section = _section(problem)
+def section_coords(problem_id: str) -> tuple[str, ...]:
+    """The recorded coordinates of a problem's (first) Poincaré section (by its id)."""
+    section = _section(problem_id)
     return tuple(section.coords) if section is not None else ()
 
 
 def section_plot(problem: str, cells, points, style) -> Plot | None:
     """One panel per section cell: its crossings in the section's coordinates."""
-    coords = section_coords(str(cells["problem"].iloc[0]))
+    coords = section_coords(str(cells["problem_id"].iloc[0]))
     if len(coords) < 2:
         return None
     ids = [int(c) for c in cells["cell"] if c in set(points["cell"])][:MAX_CURVES]
@@ -319,7 +320,7 @@ def section_plot(problem: str, cells, points, style) -> Plot | None:
                 "s": 1.5, "c": s["chart"].to_numpy(float), "cmap": "tab10", "vmin": 0.5,
                 "vmax": 10.5, "linewidths": 0}, scatter=True))
             # the colour bar shows the problem's charts only, not tab10's unused colours above
-            n = section_charts(str(cells["problem"].iloc[0])) or int(np.nanmax(s["chart"]))
+            n = section_charts(str(cells["problem_id"].iloc[0])) or int(np.nanmax(s["chart"]))
             panel.colorbar = {"label": "chart", "ticks": list(range(1, n + 1)),
                               "boundaries": [k + 0.5 for k in range(n + 1)],
                               "values": list(range(1, n + 1))}

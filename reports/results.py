@@ -15,7 +15,6 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from gnibench.reports.families import add_families
 from gnibench.suite.foundation.errors import UserError
 
 IMAGE_SUFFIXES = (".png", ".svg")
@@ -92,13 +91,22 @@ def is_results_dir(path: Path) -> bool:
     return all((path / f).is_file() for f in ("cells.parquet", "samples.parquet", "timings.parquet"))
 
 
-CELL_COLUMNS = ("cell", "problem", "method", "status", "h", "t_end")
+#: what a report reads of cells.parquet: the specs and what the runner derived from the typed
+#: cell (its problem id, base method, modifiers, how the method runs, its family), so that no
+#: spec text is parsed again here
+CELL_COLUMNS = ("cell", "problem", "method", "status", "h", "t_end", "problem_id", "base_method",
+                "modifiers", "method_kind", "family", "sweep", "sweep_value", "adaptive")
+#: columns that tables written before gnibench 0.2 lack
+NEWER = ("problem_id", "base_method", "modifiers", "family", "sweep", "sweep_value", "adaptive")
 
 
 def _ours(table, path: Path, columns):
     """``table`` when it has the columns a gnibench table has, else a one-line UserError (a
     Parquet file of another program under the same name was a KeyError traceback)."""
     missing = [c for c in columns if c not in table.columns]
+    if missing and all(c in NEWER for c in missing):
+        raise UserError(f"cannot read {path} (no column {missing[0]!r}): it was written by an "
+                        f"earlier gnibench; run the command that wrote it again")
     if missing:
         raise UserError(f"cannot read {path} (no column {missing[0]!r}); it is damaged or not a "
                         f"gnibench table: run the command that wrote it again")
@@ -111,7 +119,6 @@ def load_results(path: Path) -> Results:
     path = Path(path)
     meta = parquet_meta(path / "cells.parquet")
     cells = _ours(read_table(path / "cells.parquet"), path / "cells.parquet", CELL_COLUMNS)
-    cells = add_families(cells)
     timings = _ours(read_table(path / "timings.parquet"), path / "timings.parquet",
                     ("cell", "wall_seconds", "compile_seconds"))
     written = str(parquet_meta(path / "timings.parquet").get("written_at", ""))

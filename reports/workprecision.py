@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 from gnibench.reports.drawing import Job
 from gnibench.reports.palette import styles
-from gnibench.reports.plots import Figure, brief, clip, layout, legend_width
+from gnibench.reports.plots import Figure, brief, clip, layout, legend_width, problem_id_of
 from gnibench.reports.render import Panel, Plot, Series
 
 
@@ -50,8 +50,7 @@ def wp_figures(problem: str, cells, wall_by_cell: dict[int, float], out_dir: Pat
     """The work-precision figures of one problem's cells (with family columns); their drawing is
     appended to ``jobs``."""
     fams = list(dict.fromkeys(cells["family"]))
-    style = styles(fams, dict(zip(cells["family"], cells["adaptive"])),
-                   dict(zip(cells["family"], cells["method_kind"])))
+    style = styles(cells)
     ok = cells[cells["status"] == "ok"].copy()
     ok["wall_ms"] = [wall_by_cell.get(int(c), math.nan) * 1e3 for c in ok["cell"]]
     rows = measures(cells)
@@ -77,7 +76,8 @@ def wp_figures(problem: str, cells, wall_by_cell: dict[int, float], out_dir: Pat
                     "label": clip(fam, 40)}))
             panels.append(panel)
     panels[0].title, panels[1].title = "against f-evaluations", "against wall time"
-    plot = _plot(panels, len(rows), f"{brief(problem)}: work-precision")
+    plot = _plot(panels, len(rows), f"{brief(problem, problem_id_of(problem, cells))}: "
+                                    f"work-precision")
     file = f"{prefix}-work-precision.png"
     jobs.append(Job(plot, out_dir / file))
     words = ", ".join(label for _, label in rows)

@@ -1,4 +1,4 @@
-"""The order in which the test modules are run: the costliest first.
+"""The order in which the test modules are run: the longest first, by their measured durations.
 
 With ``--dist loadscope --no-loadscope-reorder`` (pyproject.toml) pytest-xdist hands whole modules
 to the workers in collection order, each worker taking the next module when it runs dry. Handing
@@ -7,11 +7,21 @@ by default pytest-xdist orders the modules by their number of tests, which put s
 longest, with few tests, last (one worker ran alone at the end). Without pytest-xdist the order
 only changes which module runs first.
 
+The durations are measured, not ranked by hand: ``pytest --store-durations`` (best on an empty
+kernel cache, as CI runs: ``GNIBENCH_CACHE_DIR`` set to a new directory) writes the summed
+setup, call and teardown times of each test module to tests/durations.json, which is committed.
+A module that is not in it yet (a new one) is ranked at the median of the measured ones.
+
 Since the order of the modules on a worker is not fixed, a module leaves the registries as it
 found them: the user definitions it loaded (``--load``, an experiment's ``load``, the API) are
 unloaded after it.
 """
 from __future__ import annotations
+
+import json
+import statistics
+from collections import defaultdict
+from pathlib import Path
 
 import pytest
 from gnibench.suite.foundation import datastack
@@ -20,39 +30,81 @@ from gnibench.suite.foundation import datastack
 # kept for reuse (suite/foundation/datastack.py; tests/kernels/test_datastack.py also runs without them)
 datastack.install()
 
-#: the costliest modules, longest first: their summed test durations (s) in a cold run (empty
-#: kernel cache) on 2 cores, 2026-11-27; the modules not listed follow in collection order
-COSTLIEST_FIRST = [
-    "test_time_grid.py",          # 70
-    "test_hlw_chapter_1.py",         # 55
-    "test_inline.py",             # 51
-    "test_b_sections_7_8.py",      # 50
-    "test_orders.py",             # 38
-    "test_dense_output.py",       # 32
-    "test_sections.py",           # 27
-    "test_runner_store.py",       # 27
-    "test_signals.py",            # 27
-    "test_b_section_5.py",       # 26
-    "test_summation.py",          # 25
-    "test_cache_healing.py",      # 23
-    "test_generating_function.py",  # 21
-    "test_seed_problems.py",      # 20
-    "test_cache_integrity.py",    # 19
-    "test_user_definitions_unseen.py",       # 15
-    "test_locator_precision.py",  # 14
-    "test_b_section_6.py",       # 13
-    "test_user_runs.py",          # 12
-    "test_reversibility.py",      # 11
-    "test_hairer_counts.py",      # 10
-    "test_user_definitions.py",   # 10
-    "test_cli_refusals.py",         # 10
-]
+TESTS = Path(__file__).resolve().parent
+#: measured seconds per test module (path relative to tests/), written by --store-durations
+DURATIONS = TESTS / "durations.json"
+
+
+def read_durations() -> dict[str, float]:
+    """The measured duration of each test module (tests/durations.json), or {} without one."""
+    try:
+        return {str(k): float(v) for k, v in json.loads(DURATIONS.read_text()).items()}
+    except (OSError, ValueError, AttributeError):
+        return {}
+
+
+def pytest_addoption(parser):
+    parser.addoption("--store-durations", action="store_true", default=False,
+                     help="write the summed duration of each test module to tests/durations.json "
+                          "(the order in which the modules are handed out: the longest first)")
+
+
+def _module(path) -> str:
+    return Path(path).resolve().relative_to(TESTS).as_posix()
+
+
+def longest_first(modules: list[str], durations: dict[str, float]) -> list[str]:
+    """The modules (paths relative to tests/) by measured duration, longest first (a stable
+    sort); a module without a measurement at the median of the others."""
+    default = statistics.median(durations.values()) if durations else 0.0
+    return sorted(modules, key=lambda m: -durations.get(m, default))
 
 
 def pytest_collection_modifyitems(session, config, items):
-    """A stable sort by the module's rank: each module's tests stay together and in order."""
-    rank = {name: k for k, name in enumerate(COSTLIEST_FIRST)}
-    items.sort(key=lambda item: rank.get(item.path.name, len(rank)))
+    """The modules in :func:`longest_first` order; each module's tests stay together and in
+    order."""
+    def name(item) -> str:
+        try:
+            return _module(item.path)
+        except ValueError:                  # a test outside tests/ (e.g. benchmarks/)
+            return str(item.path)
+
+    rank = {m: k for k, m in enumerate(longest_first(list(dict.fromkeys(map(name, items))),
+                                                     read_durations()))}
+    items.sort(key=lambda item: rank[name(item)])
+
+
+class _Durations:
+    """Sums the reported durations per module (on the controller: pytest-xdist sends each
+    worker's reports to it) and writes them when the session ends."""
+
+    def __init__(self, root: Path):
+        self.root = root
+        self.seconds: dict[str, float] = defaultdict(float)
+
+    @pytest.hookimpl
+    def pytest_runtest_logreport(self, report):
+        try:
+            name = _module(self.root / report.nodeid.split("::")[0])
+        except ValueError:                  # not under tests/
+            return
+        self.seconds[name] += report.duration
+
+    @pytest.hookimpl
+    def pytest_sessionfinish(self, session, exitstatus):
+        if not self.seconds:
+            return
+        ordered = dict(sorted(((k, round(v, 2)) for k, v in self.seconds.items()),
+                              key=lambda kv: (-kv[1], kv[0])))
+        DURATIONS.write_text(json.dumps(ordered, indent=1) + "\n", encoding="utf-8")
+
+
+def pytest_configure(config):
+    """Where durations are stored (the controller only, not a pytest-xdist worker); then the
+    garbage collector's settings (below)."""
+    if config.getoption("--store-durations") and not hasattr(config, "workerinput"):
+        config.pluginmanager.register(_Durations(Path(config.rootpath)), "gnibench-durations")
+    _collector_settings()
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -75,7 +127,7 @@ def _freeze_alive() -> None:
     gc.freeze()
 
 
-def pytest_configure(config):
+def _collector_settings() -> None:
     """The process is frozen before the test modules are imported: gnibench's own freezing while
     it compiles (``gnibench.suite.cell.codegen.compiling``) then leaves it as it is, also for a
     kernel compiled at collection. The oldest generation is collected before each module only

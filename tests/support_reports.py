@@ -58,18 +58,18 @@ def png_bytes(width: int = 40, height: int = 30) -> bytes:
 
 def make_results(root: Path, monkeypatch) -> Path:
     """Run the hostile experiment into ``root/results`` (one cell made to fail)."""
-    import gnibench.suite.cell.solve
+    import gnibench.suite.cell.driver
     from gnibench.suite.runs.runner import run_experiment
 
-    real = gnibench.suite.cell.solve.solve_cell
+    real = gnibench.suite.cell.driver.integrate
 
-    def solve_cell(cell, **kw):
+    def integrate(cell, **kw):
         method = cell.method_text
         if "stormer-verlet:h=0.025" in method:
             raise RuntimeError(HOSTILE_REASON)
         return real(cell, **kw)
 
-    monkeypatch.setattr(gnibench.suite.cell.solve, "solve_cell", solve_cell)
+    monkeypatch.setattr(gnibench.suite.cell.driver, "integrate", integrate)
     path = root / "hostile.toml"
     path.write_text(EXPERIMENT, encoding="utf-8")
     out = run_experiment(path, root / "results", jobs=1, log=open("/dev/null", "w"))  # noqa: SIM115
@@ -81,4 +81,24 @@ def make_results(root: Path, monkeypatch) -> Path:
         '"reference": "[HLW] Fig 2.3", "scale": "reduced", "files": {"png": "fig.png"}, '
         '"panels": [{"title": "energy", "xlabel": "t", "ylabel": "|err H|", '
         '"curves": [{"label": "rk4 <b>"}]}], "notes": ["note | # one"]}', encoding="utf-8")
+    return out
+
+
+def with_method_columns(cells):
+    """A hand-made cells table with the columns the runner derives from each typed cell
+    (``problem_id``, ``base_method``, ``modifiers``, ``method_kind``, ``family``, ``sweep``,
+    ``sweep_value``, ``adaptive``; suite/runs/tables.py), from its ``problem`` and ``method``."""
+    from gnibench.suite.cell.spec import prepare
+
+    out = cells.copy()
+    specs = [prepare(str(p), str(m)) for p, m in zip(cells["problem"], cells["method"])]
+    families = [m.family() for _, m in specs]
+    out["problem_id"] = [p.id for p, _ in specs]
+    out["base_method"] = [m.id for _, m in specs]
+    out["modifiers"] = ["+".join(x.id for x in m.modifiers) for _, m in specs]
+    out["method_kind"] = [m.kind for _, m in specs]
+    out["family"] = [f.label for f in families]
+    out["sweep"] = [f.sweep for f in families]
+    out["sweep_value"] = [f.value for f in families]
+    out["adaptive"] = [f.adaptive for f in families]
     return out

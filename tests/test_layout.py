@@ -10,8 +10,9 @@ Floors, from the ground up (README, "Layout"; ``suite/__init__.py``)::
     5 gnibench.suite.runs         experiments, runner, tables, storage, bench
     6 gnibench.suite.ledger       the claims ledger: entries, closed forms, identity checks, verdicts
     7 gnibench.reports            reports from tables
-    8 gnibench.suite.cli          the command line
-    9 gnibench.suite.api          the Python API (the package top re-exports it)
+    8 gnibench.suite.api          the library's entry points, the Python API (the package top
+                                  re-exports it)
+    9 gnibench.suite.cli          the command line: parses arguments, calls the library, prints
 
 A module may import from its own floor or below. Every import counts, also those made inside a
 function (they are for start-up time only, never to dodge a circle).
@@ -24,6 +25,8 @@ import sys
 import tomllib
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGE_DIRS = ("suite", "problems", "methods", "reports")
 FLOORS = (
@@ -35,8 +38,8 @@ FLOORS = (
     ("gnibench.suite.runs", 5),
     ("gnibench.suite.ledger", 6),
     ("gnibench.reports", 7),
-    ("gnibench.suite.cli", 8),
-    ("gnibench.suite.api", 9),
+    ("gnibench.suite.api", 8),
+    ("gnibench.suite.cli", 9),
 )
 # package markers with no code of their own (docstrings, the version)
 NEUTRAL = {"gnibench", "gnibench.suite"}
@@ -96,6 +99,36 @@ def test_imports_go_downwards_only():
     assert not up, "imports that go up a floor:\n" + "\n".join(sorted(up))
 
 
+def test_the_library_does_not_import_the_command_line():
+    """The library first, the command line on top: nothing below ``suite/cli`` imports it (the
+    floors say so; this names the rule of issue 44 on its own, also for the package top)."""
+    graph = import_graph()
+    found = sorted(f"{src} imports {dst}" for src, dsts in graph.items() for dst in dsts
+                   if dst.startswith("gnibench.suite.cli") and not src.startswith("gnibench.suite.cli"))
+    assert not found, "\n".join(found)
+
+
+def test_reports_read_tables_not_spec_texts():
+    """The reports read the columns the runner writes from the typed cell (problem_id,
+    base_method, modifiers, family, ...): they import no spec parser."""
+    graph = import_graph()
+    found = sorted(f"{src} imports {dst}" for src, dsts in graph.items() for dst in dsts
+                   if src.startswith("gnibench.reports") and dst == "gnibench.suite.cell.spec")
+    assert not found, "\n".join(found)
+
+
+def test_no_module_class_assignment():
+    """No module is given another class (``module.__class__ = ...``): the package's names are
+    plain functions and subpackages."""
+    found = []
+    for name, path in module_files().items():
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Assign) and any(isinstance(t, ast.Attribute) and t.attr == "__class__"
+                                                    for t in node.targets):
+                found.append(f"{name}:{node.lineno}")
+    assert not found, found
+
+
 def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
     """Strongly connected components of more than one module, or with a self-loop (Tarjan)."""
     index: dict[str, int] = {}
@@ -147,12 +180,55 @@ def test_cycle_detector_finds_a_planted_cycle():
     assert cycles({"a": {"b"}, "b": set()}) == []
 
 
-def test_pyproject_lists_every_package():
+def _setup_packages() -> list[str]:
+    """The package list setup.py derives (its ``packages()``, without running setup)."""
+    import runpy
+
+    return runpy.run_path(str(ROOT / "setup.py"), run_name="setup")["packages"](str(ROOT))
+
+
+def test_the_package_list_is_derived_from_the_folders():
+    """setup.py derives the packages (setuptools' discovery under the package folders, mapped
+    into gnibench); pyproject.toml lists none by hand; every folder with an __init__.py is one."""
     doc = tomllib.loads((ROOT / "pyproject.toml").read_text())
-    listed = set(doc["tool"]["setuptools"]["packages"])
+    assert "packages" not in doc["tool"]["setuptools"]
+    listed = set(_setup_packages())
     packages = {m for m, p in module_files().items() if p.name == "__init__.py"}
-    assert listed == packages, (f"missing from pyproject: {sorted(packages - listed)}; "
-                                f"listed without an __init__.py: {sorted(listed - packages)}")
+    assert listed == packages, (f"not found by setup.py: {sorted(packages - listed)}; "
+                                f"found without an __init__.py: {sorted(listed - packages)}")
+
+
+def test_a_wheel_holds_every_package_and_its_data(tmp_path):
+    """A non-editable build (pip wheel, offline, as CI's ``pip install .`` builds it) holds every
+    package, every file of pyproject.toml's package-data, and neither setup.py nor the tests."""
+    import shutil
+    import zipfile
+
+    pytest.importorskip("wheel")
+    src = tmp_path / "src"
+    shutil.copytree(ROOT, src, ignore=shutil.ignore_patterns(
+        ".git", "__pycache__", "*.egg-info", "build", "dist", "results", ".benchmarks", "docs",
+        "tests", "benchmarks", "examples"))
+    proc = subprocess.run([sys.executable, "-m", "pip", "wheel", str(src), "--no-deps",
+                           "--no-build-isolation", "--no-index", "-q", "-w", str(tmp_path / "w")],
+                          capture_output=True, text=True, check=False)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    (whl,) = (tmp_path / "w").glob("gnibench-*.whl")
+    names = set(zipfile.ZipFile(whl).namelist())
+    for package in _setup_packages():
+        assert f"{package.replace('.', '/')}/__init__.py" in names, package
+    data = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["package-data"]
+    for package, patterns in data.items():
+        folder = ROOT.joinpath(*package.split(".")[1:])
+        for pattern in patterns:
+            files = [p for p in folder.glob(pattern) if p.is_file()]
+            assert files, (package, pattern)
+            for f in files:
+                assert f"gnibench/{f.relative_to(ROOT).as_posix()}" in names, f
+    assert "gnibench/setup.py" not in names
+    assert not [n for n in names if n.startswith(("tests/", "gnibench/tests/", "benchmarks/"))]
+    modules = {f"gnibench/{p.relative_to(ROOT).as_posix()}" for p in module_files().values()}
+    assert modules <= names, sorted(modules - names)[:5]
 
 
 def test_only_gnibench_is_importable(tmp_path):
@@ -170,10 +246,28 @@ def test_only_gnibench_is_importable(tmp_path):
     assert proc.returncode == 0, proc.stderr + proc.stdout
 
 
-def test_the_test_modules_run_first_exist():
-    """tests/conftest.py names the costliest test modules (run first): each is a test module."""
-    from conftest import COSTLIEST_FIRST
+def test_the_measured_durations_name_test_modules():
+    """tests/durations.json (written by ``pytest --store-durations``; the modules are handed to
+    the workers longest first, tests/conftest.py) holds a duration >= 0 for test modules that
+    exist, and for most of them: a module renamed or removed, or a stale file, fails here."""
+    from conftest import read_durations
 
-    assert len(set(COSTLIEST_FIRST)) == len(COSTLIEST_FIRST)
-    for name in COSTLIEST_FIRST:
-        assert len(list((ROOT / "tests").rglob(name))) == 1, name
+    durations = read_durations()
+    modules = {p.relative_to(ROOT / "tests").as_posix() for p in (ROOT / "tests").rglob("test_*.py")}
+    assert durations, "tests/durations.json is missing: run pytest --store-durations"
+    stale = sorted(set(durations) - modules)
+    assert not stale, f"tests/durations.json names modules that do not exist: {stale}"
+    assert all(v >= 0 for v in durations.values())
+    missing = sorted(modules - set(durations))
+    assert len(missing) <= len(modules) // 10, f"not measured yet (pytest --store-durations): {missing}"
+
+
+def test_modules_are_handed_out_longest_first():
+    """The order of the modules: measured durations, longest first; an unmeasured module at the
+    median; ties in collection order."""
+    from conftest import longest_first
+
+    durations = {"a.py": 5.0, "b.py": 50.0, "c.py": 1.0, "d.py": 20.0}
+    assert longest_first(["a.py", "b.py", "c.py", "d.py", "new.py", "e.py"], durations) == [
+        "b.py", "d.py", "new.py", "e.py", "a.py", "c.py"]           # median 12.5
+    assert longest_first(["x.py", "y.py"], {}) == ["x.py", "y.py"]

@@ -55,6 +55,10 @@ class Results:
         if not figure:
             raise FigureDataError(f"{root}: experiment {meta.get('experiment')!r} has no [figure]")
         cells = pd.read_parquet(path)
+        if "base_method" not in cells.columns:
+            raise FigureDataError(f"{root}: its tables were written by an earlier gnibench (no "
+                                  f"column 'base_method'); run gnibench reproduce "
+                                  f"{figure.get('id', '')} again")
         columns = _sample_columns(figure)
         samples_path = root / "samples.parquet"
         if columns and samples_path.is_file():

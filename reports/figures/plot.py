@@ -136,8 +136,8 @@ def _draw_panel(ax, results, source: dict, source_index: int, panel: dict) -> di
 
 
 def _draw_curve(ax, results, curve: dict, logx: bool, logy: bool) -> dict:
-    color = curve_color(curve)
     rows = [results.cell_row(c) for c in curve["cells"]]
+    color = curve_color(curve, rows[0])
     label = format_label(curve["label"], rows)
     out = {"label": label, "cells": curve["cells"], "x": curve["x"], "y": curve["y"],
            "style": curve["style"], "color": color, "points": 0, "samples": 0,
@@ -202,7 +202,7 @@ def _pieces(x: np.ndarray, y: np.ndarray, jump: float = 10.0):
 
 def _draw_sets(ax, results, curve: dict, out: dict, logx: bool, logy: bool) -> dict:
     """The images of a point set: one shape per time of ``at`` (a closed polygon, or points)."""
-    color = curve_color(curve)
+    color = curve_color(curve, results.cell_row(curve["cells"][0]))
     frames = [where(results.cell_samples(c), curve.get("where")) for c in curve["cells"]]
     out["shapes"] = []
     for n, t in enumerate(curve["at"]):

@@ -84,11 +84,11 @@ RC = {
 }
 
 
-def method_key(method_spec: str) -> str:
-    """``rk4:h=0.01+observer:theta=1`` -> ``rk4+observer`` (base id and modifier ids)."""
-    from gnibench.suite.cell.spec import structure
-
-    return structure(method_spec).key
+def method_key(row: dict) -> str:
+    """The palette key of a cell (a row of cells.parquet): its base method and modifier ids,
+    ``rk4+observer`` for ``rk4:h=0.01+observer:theta=1``."""
+    modifiers = row.get("modifiers") or ""
+    return str(row["base_method"]) + ("+" + str(modifiers) if modifiers else "")
 
 
 def color_of(key: str) -> str:
@@ -99,8 +99,9 @@ def color_of(key: str) -> str:
     return EXTRA[digest % len(EXTRA)]
 
 
-def curve_color(curve: dict) -> str:
-    """A curve's colour: its ``color`` (a palette key or a matplotlib colour), else its method's."""
+def curve_color(curve: dict, row: dict) -> str:
+    """A curve's colour: its ``color`` (a palette key or a matplotlib colour), else the method's
+    of its first cell (``row``, its row of cells.parquet)."""
     from matplotlib.colors import is_color_like
 
     given = curve.get("color") or ""
@@ -108,4 +109,4 @@ def curve_color(curve: dict) -> str:
         return PALETTE[given]
     if given and is_color_like(given):
         return given
-    return color_of(method_key(curve["method"]))
+    return color_of(method_key(row))

@@ -107,7 +107,7 @@ def draw_table(results, figure: dict):
             cell.set_text_props(fontweight="bold")
             cell.set_facecolor("#EEEEEE")
         elif c == 0:
-            key = method_key(figure["table"]["rows"][r - 1]["method"])
+            key = method_key(results.cell_row(figure["table"]["rows"][r - 1]["cells"][0]))
             cell.set_text_props(color=color_of(key), fontweight="bold")
     manifest = [{"title": "", "xlabel": "", "ylabel": "", "table": data,
                  "curves": [{"label": row["label"], "cells": row["cells"],

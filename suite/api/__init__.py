@@ -1,20 +1,24 @@
-"""The Python API: the command line's ``solve``, ``run``, ``verify``, ``reproduce``, ``report``
-and ``list`` as functions that return pandas DataFrames (README, "Python API").
+"""The Python API: the library the command line is a shell on.
 
-``gnibench`` re-exports every name here on first use. ``load(path)`` defines the problems and
-methods of a TOML file of user definitions (:mod:`gnibench.suite.cell.user`); ``GNIBENCH_LOAD``
-and the installed entry points are loaded by the first call of a function here, as by the
-command line. Errors raise
-:class:`~gnibench.suite.foundation.errors.UserError` with the line the command line prints.
+``solve``, ``run``, ``verify``, ``reproduce``, ``report``, ``load`` and the listings
+``list_problems``, ``list_methods``, ``list_metrics`` return pandas DataFrames (or paths, or
+:class:`Trajectory` / :class:`RunResult` records); ``gnibench`` re-exports every name here on
+first use. Every function checks its arguments against one schema before any work
+(:mod:`gnibench.suite.api.arguments`); bad input raises :class:`UserError` with one line (the
+line the command line prints). ``GNIBENCH_LOAD`` and the installed entry points are loaded by the
+first call that needs the registries, as by the command line.
 """
-from gnibench.suite.api.listing import methods, metrics, problems
-from gnibench.suite.api.running import RunResult, report, reproduce, run, verify
+from gnibench.suite.api.listing import list_methods, list_metrics, list_problems
+from gnibench.suite.api.loading import load
+from gnibench.suite.api.reporting import report
+from gnibench.suite.api.reproducing import reproduce
+from gnibench.suite.api.running import RunResult, run
 from gnibench.suite.api.solving import Trajectory, solve
-from gnibench.suite.cell.user.loader import load
+from gnibench.suite.api.verifying import verify
 from gnibench.suite.foundation import datastack
 from gnibench.suite.foundation.errors import UserError
 
 datastack.install()     # CPython's frame stack without mmap churn (suite/foundation/datastack.py)
 
-__all__ = ["RunResult", "Trajectory", "UserError", "load", "methods", "metrics", "problems",
-           "report", "reproduce", "run", "solve", "verify"]
+__all__ = ["RunResult", "Trajectory", "UserError", "list_methods", "list_metrics",
+           "list_problems", "load", "report", "reproduce", "run", "solve", "verify"]

@@ -1,10 +1,8 @@
-"""``gnibench.run``, ``gnibench.verify``, ``gnibench.reproduce``, ``gnibench.report``: the
-command line's ``run``, ``verify``, ``reproduce`` and ``report`` from Python, through the same code
-(the runner, the CLI's own argument parser and commands), returning tables as DataFrames."""
+"""``gnibench.run``: an experiment, as ``gnibench run``, through the same runner, returning its
+tables as DataFrames (:class:`RunResult`)."""
 from __future__ import annotations
 
 import contextlib
-import io
 import json
 import math
 import re
@@ -12,15 +10,40 @@ import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from gnibench.suite.api.arguments import api_function
 from gnibench.suite.foundation.errors import UserError
 
 
 @dataclass
 class RunResult:
-    """The tables of a run: ``samples`` (one row per cell and sample), ``cells`` (one row per
-    cell), ``timings`` (wall and compile times) as DataFrames, ``meta`` (the tables' provenance:
-    experiment, TOML text, versions, cells), and ``output``, the results directory (None when the
-    run went to a temporary directory)."""
+    """The tables of an experiment run (:func:`gnibench.run`).
+
+    Attributes
+    ----------
+    samples : pandas.DataFrame
+        One row per cell and sample: ``cell``, ``problem``, ``method``, ``t``, ``steps``,
+        ``nfev``, the states, ``err_<I>``, ``global_error`` and the chosen metrics' columns.
+    cells : pandas.DataFrame
+        One row per cell: its specs (``problem``, ``method``, ``base_method``, ``modifiers``,
+        ``method_kind``), horizon, ``status`` and ``reason``, counts, the per-cell metrics.
+    timings : pandas.DataFrame
+        Wall-clock and compile times per cell (the only table that is not reproducible).
+    meta : dict
+        The tables' provenance: experiment, its TOML text, versions, the cells.
+    output : pathlib.Path or None
+        The results directory; None when the run went to a temporary directory.
+
+    Examples
+    --------
+    >>> import gnibench
+    >>> res = gnibench.run({"name": "one-cell", "title": "One cell", "reference": "none",
+    ...                     "t_end": 0.5, "cells": [{"problems": ["pendulum"],
+    ...                                              "methods": ["rk4:h=0.1"]}]}, jobs=1)
+    >>> res
+    RunResult('one-cell': 1 cells, 6 samples, in memory)
+    >>> res.cells.loc[0, "status"]
+    'ok'
+    """
 
     samples: object
     cells: object
@@ -46,15 +69,62 @@ def read_tables(out: Path, output: Path | None) -> RunResult:
     return RunResult(**tables, meta=meta, output=output)
 
 
-def run(experiment, *, output=None, jobs: int | None = None, executor: str = "local",
-        fresh: bool = False, scheduler: str | None = None, scale: str = "paper") -> RunResult:
-    """Run an experiment, as ``gnibench run``: a shipped id (``"quick"``), a path to a TOML file,
-    or a dict with the TOML schema (``suite/experiments/README.md``; its ``load`` paths are
-    relative to the working directory). ``output``: the results
-    directory (resumable, as the command line's ``-o``; no report is written, see
-    :func:`report`); None runs in a temporary directory and keeps the tables in memory only.
-    ``jobs``, ``executor`` (``local`` or ``dask``), ``scheduler``, ``fresh``, ``scale``: as on
-    the command line."""
+@api_function
+def run(experiment: str | Path | dict, *, output: Path | None = None, jobs: int | None = None,
+        executor: str = "local", fresh: bool = False, scheduler: str | None = None,
+        scale: str = "paper") -> RunResult:
+    """Run an experiment (a matrix of problems x methods x options), as ``gnibench run``.
+
+    Its cells run in parallel and are stored as they finish: an output directory given again
+    resumes the run, computing only the cells that are missing (or whose code changed).
+
+    Parameters
+    ----------
+    experiment : str, path or dict
+        A shipped experiment id (``"quick"``; ``gnibench run --help`` and the docs list them),
+        a path to a TOML file, or a dict with the TOML schema (its ``load`` paths are relative
+        to the working directory).
+    output : path, optional
+        The results directory (``samples.parquet``, ``cells.parquet``, ``timings.parquet``,
+        ``summary.md``; no report site, see :func:`gnibench.report`). None runs in a temporary
+        directory and keeps the tables in memory only.
+    jobs : int, optional
+        Worker processes (default: the number of cores; 1: serial, in this process).
+    executor : {"local", "dask"}, default "local"
+        A local process pool, or a Dask cluster (a ``LocalCluster`` of ``jobs`` workers, or the
+        one at ``scheduler``).
+    fresh : bool, default False
+        Ignore the cells stored by earlier runs in ``output``.
+    scheduler : str, optional
+        The address of a running Dask scheduler (with ``executor="dask"``), e.g.
+        ``"tcp://127.0.0.1:8786"``.
+    scale : {"paper", "quick"}, default "paper"
+        The experiment's paper scale, or its shortened quick scale.
+
+    Returns
+    -------
+    RunResult
+        The tables as DataFrames (``samples``, ``cells``, ``timings``), their provenance
+        (``meta``) and the results directory (``output``).
+
+    Raises
+    ------
+    gnibench.UserError
+        An unknown experiment, a bad file or dict, a bad option, before any cell runs. A cell
+        that diverges is a status in the tables, not an exception.
+
+    Examples
+    --------
+    >>> import gnibench
+    >>> res = gnibench.run({"name": "pendulum-steps", "title": "RK4 on the pendulum",
+    ...                     "reference": "[HLW] I.1", "t_end": 1.0,
+    ...                     "cells": [{"problems": ["pendulum"], "methods": ["rk4"],
+    ...                                "vary": {"h": [0.1, 0.05]}}]}, jobs=1)
+    >>> res.cells[["method", "status", "steps"]]
+               method status  steps
+    0   rk4:h=0.1     ok     10
+    1  rk4:h=0.05     ok     20
+    """
     from gnibench.reports.markdown import render_summary
     from gnibench.suite.cell.user.loader import discover, refresh
     from gnibench.suite.runs import executors
@@ -65,105 +135,18 @@ def run(experiment, *, output=None, jobs: int | None = None, executor: str = "lo
     refresh()                       # definitions edited since they were loaded
     if isinstance(experiment, dict):        # its `load` paths are relative to the working dir
         exp = parse_experiment(toml_text(experiment), "experiment dict", scale, Path.cwd())
-    elif isinstance(experiment, (str, Path)):
-        exp = load_experiment(experiment, scale)
     else:
-        raise UserError(f"bad experiment {type(experiment).__name__}; allowed: a shipped "
-                        f"experiment id, a path to a TOML file, or a dict with the TOML schema")
+        exp = load_experiment(experiment, scale)
     executors.check(executor, jobs, scheduler)
     with contextlib.ExitStack() as stack:
         if output is None:
             out = Path(stack.enter_context(tempfile.TemporaryDirectory(prefix="gnibench-run-")))
         else:
-            out = Path(output)
+            out = output
         run_experiments([exp], [out], out, jobs=jobs, executor=executor, scheduler=scheduler,
                         fresh=fresh, summarize=render_summary if output is not None else None,
                         name=exp.name)
-        return read_tables(out, None if output is None else out)
-
-
-def _cli(argv: list[str]) -> int:
-    """Run a command of the command line (parsed by its own parser: the same defaults and
-    checks); its standard output, meant for a terminal, is dropped."""
-    from gnibench.suite.cli.main import _parser
-    from gnibench.suite.cli.reproduce import run as reproduce_command
-    from gnibench.suite.cli.verify import verify_command
-
-    a = _parser().parse_args(argv)
-    command = {"verify": verify_command, "reproduce": reproduce_command}[a.command]
-    with contextlib.redirect_stdout(io.StringIO()):
-        return command(a)
-
-
-def _common(output, jobs, executor, scheduler) -> list[str]:
-    argv = ["--executor", str(executor)]
-    if output is not None:
-        argv += ["-o", str(output)]
-    if jobs is not None:
-        argv += ["-j", str(int(jobs))]
-    if scheduler is not None:
-        argv += ["--scheduler", str(scheduler)]
-    return argv
-
-
-def _ids(ids) -> list[str]:
-    if isinstance(ids, str):
-        return [ids]
-    if not all(isinstance(i, str) for i in ids):
-        raise UserError(f"bad ids {ids!r}; allowed: an id, 'all', or a list of ids")
-    return list(ids)
-
-
-def verify(ids="all", *, scale: str = "quick", output=None, jobs: int | None = None,
-           executor: str = "local", scheduler: str | None = None):
-    """Check claims of the ledger, as ``gnibench verify``; returns the ledger as a DataFrame (one
-    row per claim: ``id``, ``citation``, ``claim``, ``verdict``, ``expected``, ``unexpected``,
-    ``measured``, ``seed_value``, ``threshold``, ``figure``, ...). ``output``: the results
-    directory (the runs' tables, ``ledger.parquet``, ``ledger.md``; resumable and shared with
-    :func:`reproduce`); None works in a temporary directory."""
-    import pandas as pd
-
-    with contextlib.ExitStack() as stack:
-        out = Path(output) if output is not None else Path(
-            stack.enter_context(tempfile.TemporaryDirectory(prefix="gnibench-verify-")))
-        _cli(["verify", *_ids(ids), "--scale", str(scale), "--no-report",
-              *_common(out, jobs, executor, scheduler)])
-        return pd.read_parquet(out / "ledger.parquet")
-
-
-def reproduce(ids="all", *, scale: str = "paper", output=None, jobs: int | None = None,
-              executor: str = "local", scheduler: str | None = None, fresh: bool = False,
-              redraw: bool = False) -> dict[str, Path]:
-    """Run and draw figures of the seeds, as ``gnibench reproduce`` (images, ``figure.json``
-    and tables under ``output/<id>/``; default ``results/seeds``, as the command line); returns
-    {figure id: its results directory}."""
-    from gnibench.suite.runs import reproduce as rep
-
-    out = Path(output) if output is not None else rep.DEFAULT_DIR
-    chosen = rep.choose(_ids(ids))
-    argv = ["reproduce", *chosen, "--scale", str(scale), "--no-report",
-            *_common(out, None if redraw else jobs, executor, scheduler)]
-    _cli(argv + (["--fresh"] if fresh else []) + (["--redraw"] if redraw else []))
-    return {fid: out / fid for fid in chosen}
-
-
-def report(dirs, output, *, accuracy=None, benchmarks=None) -> Path:
-    """Render the report site of results directories (of :func:`run`, :func:`verify`,
-    :func:`reproduce`) into ``output``, as ``gnibench report DIR... -o SITE``; returns the
-    path of its ``index.html``."""
-    from gnibench.reports.league import DEFAULT_THRESHOLDS
-    from gnibench.reports.site import build_site
-
-    dirs = [Path(dirs)] if isinstance(dirs, (str, Path)) else [Path(d) for d in dirs]
-    try:
-        thresholds = DEFAULT_THRESHOLDS if accuracy is None else tuple(float(a) for a in accuracy)
-    except (TypeError, ValueError):
-        thresholds = ()
-    if not thresholds or not all(0 < a < math.inf for a in thresholds):
-        raise UserError(f"bad accuracy {accuracy!r}; allowed: numbers > 0, e.g. (1e-4, 1e-8)")
-    with contextlib.redirect_stdout(io.StringIO()):
-        return Path(build_site(dirs, Path(output), thresholds,
-                               None if benchmarks is None else Path(benchmarks)))
+        return read_tables(out, output)
 
 
 _BARE = re.compile(r"^[A-Za-z0-9_-]+$")

@@ -57,7 +57,13 @@ class SampleGrid:
     @property
     def rows(self) -> int:
         """Number of samples: t = 0, every ``every``-th step, and the last step."""
-        return 1 + self.nsteps // self.every + (1 if self.nsteps % self.every else 0)
+        return sample_rows(self.nsteps, self.every)
+
+
+def sample_rows(nsteps: int, every: int) -> int:
+    """Samples of ``nsteps`` steps sampled every ``every`` steps: t = 0, every ``every``-th step
+    and the last one."""
+    return 1 + nsteps // every + (1 if nsteps % every else 0)
 
 
 def grid_step(method) -> float:

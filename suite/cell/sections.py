@@ -67,7 +67,6 @@ from gnibench.methods.events import HENON_MAX_SUBSTEPS, HENON_RTOL
 from gnibench.suite.cell.calls import Buffers
 from gnibench.suite.cell.compiled import dense_output_refusal, problem_kernel
 from gnibench.suite.cell.drivers import AdaptiveDriver, FixedStepDriver, build_trajectory, kind_of
-from gnibench.suite.cell.grid import grid, grid_step
 from gnibench.suite.cell.trajectory import Trajectory
 from gnibench.suite.foundation.errors import UserError
 from gnibench.suite.foundation.provenance import versions
@@ -90,44 +89,31 @@ def crossing_intervals(gv: np.ndarray) -> np.ndarray:
     return np.nonzero(((a > 0) & (b <= 0)) | ((a < 0) & (b >= 0)))[0]
 
 
-def integrate_section(problem, method, crossings: int, steps: int | None = None,
-                      t_end: float | None = None, locator: str | None = None,
-                      progress=None, samples: Trajectory | None = None,
+def integrate_section(cell, progress=None, samples: Trajectory | None = None,
                       budget: int | None = 0) -> Trajectory:
-    """Integrate until ``crossings`` crossings of the problem's first section (or the horizon);
-    the trajectory's samples are the located crossings (``kind = "section"``).
+    """Integrate a section cell (:class:`~gnibench.suite.cell.cellspec.CellSpec` with
+    ``section`` = K, validated by its ``build``) until K crossings of the problem's first section
+    (or the horizon); the trajectory's samples are the located crossings (``kind = "section"``).
 
-    ``locator``: None (dense output where it applies, else Hénon's trick), ``"henon"`` (always
-    Hénon's trick, e.g. to compare the two) or ``"dense"`` (a UserError where it does not apply).
-    ``samples``: for external engines and transformed problems, their trajectory sampled at every
-    step (from the driver facade), scanned for crossings. ``budget``: as for
+    ``cell.locator``: None (dense output where it applies, else Hénon's trick), ``"henon"``
+    (always Hénon's trick, e.g. to compare the two) or ``"dense"``. ``samples``: for external
+    engines and transformed problems, their trajectory sampled at every step (from the driver
+    facade), scanned for crossings. ``budget``: as for
     :func:`gnibench.suite.cell.driver.integrate`.
     """
-    if isinstance(crossings, bool) or not isinstance(crossings, (int, np.integer)) or crossings < 1:
-        raise UserError(f"bad --section {crossings}; allowed: an integer >= 1 (number of crossings)")
-    if locator not in (None, "dense", "henon"):
-        raise UserError(f"bad locator {locator!r}; allowed: dense, henon")
+    problem, method, crossings, locator = cell.problem, cell.method, cell.section, cell.locator
     rec = problem.record
     sec = section_of(rec)
-    external = method.kind != "compiled"
-    if external or rec.transformed(problem.values) is not None:
-        if locator == "dense":
-            raise UserError("dense output does not locate these crossings: external engine or "
-                            "transformed problem")
+    if samples is not None:
         return _scanned(problem, method, sec, crossings, samples)
     why = dense_output_refusal(problem, method)
-    if locator == "dense" and why:
-        raise UserError(f"dense output does not locate these crossings: {why}")
     if locator == "henon" and not why:
         why = "Hénon's trick asked for (locator='henon')"
     kind = kind_of(method)
-    if kind is AdaptiveDriver and t_end is None:
-        raise UserError(f"{method.base.id} with adaptive=true needs --t-end T (not --steps)")
     name = kind.names["section" if why else "section_dense"]
-    h = grid_step(method)
-    nsteps, h_last = grid(h, steps, t_end)
+    h, nsteps, h_last = cell.h, cell.nsteps, cell.h_last
     if kind is AdaptiveDriver:
-        drv = AdaptiveDriver(problem, method, name, t_end, wanted=crossings)
+        drv = AdaptiveDriver(problem, method, name, cell.t_end, wanted=crossings)
     else:
         drv = FixedStepDriver(problem, method, name, h, nsteps, h_last, wanted=crossings)
     buffers = Buffers(min(CHUNK, crossings + 1), rec.dim, grow=True)

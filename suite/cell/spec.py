@@ -93,8 +93,53 @@ class MethodConfig:
         """How the base method runs: ``compiled``, ``external`` or ``python`` (``Method.kind``)."""
         return self.base.record.kind
 
+    def family(self) -> Family:
+        """The method's family: see :class:`Family`."""
+        rec, values = self.base.record, self.base.values
+        shown = self.base.options()
+        adaptive = values.get("adaptive") is True or getattr(rec, "adaptive", False) is True
+        sweep = next((k for k in ("h", "rtol", "tol", "epsilon") if k in shown), "")
+        if sweep == "h" and adaptive:
+            sweep = ""
+        defaults = {p.name: p.default for p in rec.params}
+        keep = [f"{k}={v}" for k, v in shown.items()
+                if k not in SWEEP and k not in QUIET and not (k in defaults
+                                                               and values[k] == defaults[k])]
+        label = "+".join([rec.id + (":" + ",".join(keep) if keep else "")]
+                         + [m.text() for m in self.modifiers])
+        value = float(values[sweep]) if sweep else float("nan")
+        return Family(label, sweep, value, adaptive)
 
-# -- the structure of a spec text, without the registries (for tables, reports, the ledger) ----
+
+#: options a work-precision sweep varies: they do not name a family
+SWEEP = ("h", "rtol", "atol", "tol", "epsilon")
+#: options that do not change a method's numbers (a step budget, the output grid of external
+#: engines): left out of the family's label
+QUIET = ("max_steps", "dt_out")
+
+
+@dataclass(frozen=True)
+class Family:
+    """A method's family: the cells of one method that differ only in its step size or tolerance
+    (a work-precision curve, a row of a league table).
+
+    ``label`` is the canonical method spec without its sweep options (:data:`SWEEP`), without
+    the options of :data:`QUIET` and without options left at their defaults, modifiers kept, e.g.
+    ``dopri5:adaptive=true,rtol=1e-08,atol=1e-08`` -> ``dopri5``,
+    ``merson:adaptive=true,rtol=1e-05,atol=1e-05`` -> ``merson:adaptive=true``,
+    ``heyoka-taylor:dt_out=0.01,tol=1e-10,precision=long double`` -> ``heyoka-taylor:precision=long
+    double``; ``sweep`` the option swept (``h``, ``rtol``, ``tol``, ``epsilon``, or "" when nothing
+    is: an adaptive method's h), ``value`` its value (NaN when none); ``adaptive``: the method
+    chooses its own steps (option ``adaptive``, or an adaptive external engine)."""
+
+    label: str
+    sweep: str
+    value: float
+    adaptive: bool
+
+
+
+# -- the structure of a spec text, without the registries (the edge: an experiment's ``vary``) --
 
 @dataclass(frozen=True)
 class Item:
@@ -134,11 +179,6 @@ class Structure:
     def id(self) -> str:
         return self.base.id
 
-    @property
-    def key(self) -> str:
-        """Base and modifier ids: ``rk4:h=0.01+observer:theta=1`` -> ``rk4+observer``."""
-        return "+".join([self.base.id] + [m.id for m in self.modifiers])
-
     def modifier(self, id: str) -> Item | None:
         return next((m for m in self.modifiers if m.id == id), None)
 
@@ -159,11 +199,6 @@ def structure(text: str, what: str = "method") -> Structure:
         name, given = parse_item(part, what if i == 0 else "modifier")
         items.append(Item(name, tuple(given.items())))
     return Structure(items[0], tuple(items[1:]))
-
-
-def item_id(text: str, what: str = "problem") -> str:
-    """The id of a spec text (``kepler-2d:e=0.6`` -> ``kepler-2d``; the base id of a method)."""
-    return structure(text, what).id
 
 
 def with_options(spec: str, target: str, options: dict[str, str]) -> str:

@@ -1,32 +1,7 @@
-"""``gnibench list``: generated from the problem, method, modifier and metric records."""
+"""``gnibench list``: the records of :func:`gnibench.suite.api.listing.listing` as aligned text."""
 from __future__ import annotations
 
-
-def listing(what: str) -> list[dict]:
-    if what == "problems":
-        from gnibench.problems import REGISTRY
-
-        return [p.describe() for p in REGISTRY.values()]
-    if what == "metrics":
-        from gnibench.suite.metrics import METRICS
-
-        return [m.describe() for m in METRICS.values()]
-    from gnibench.methods import METHODS, MODIFIERS
-
-    return [m.describe() for m in METHODS.values()] + [m.describe() for m in MODIFIERS.values()]
-
-
-def _default(p: dict) -> str:
-    d = p["default"]
-    if d is None:
-        return "-"
-    if isinstance(d, tuple):
-        return "/".join(f"{x:g}" if isinstance(x, (int, float)) else str(x) for x in d)
-    return str(d)
-
-
-def _params(params: list[dict]) -> str:
-    return "; ".join(f"{p['name']}={_default(p)} ({p['range']})" for p in params)
+from gnibench.suite.api.listing import options_text as _params
 
 
 def as_table(what: str, rows: list[dict]) -> str:

@@ -219,7 +219,7 @@ def _solve(a) -> int:
 
 
 def _list(a) -> int:
-    from gnibench.suite.cli.listing import listing
+    from gnibench.suite.api.listing import listing
 
     rows = listing(a.what)
     if a.format == "json":
@@ -258,28 +258,19 @@ def _run_with(a, pool) -> int:
     return 0
 
 
-def _accuracies(text: str | None) -> tuple[float, ...]:
-    from gnibench.reports.league import DEFAULT_THRESHOLDS
-
+def _accuracies(text: str | None) -> tuple[float, ...] | None:
     if text is None:
-        return DEFAULT_THRESHOLDS
+        return None
     allowed = "finite numbers > 0 separated by commas, e.g. 1e-4,1e-8"
     return tuple(parse_float(v, "--accuracy", low=0.0, low_open=True, allowed=allowed)
                  for v in text.split(","))
 
 
 def _report(a) -> int:
-    from gnibench.reports.site import build_site
+    from gnibench.suite.api.reporting import build_report
 
-    thresholds = _accuracies(a.accuracy)
-    site = a.output or (Path(a.dirs[0]) / "report" if len(a.dirs) == 1 else Path("report"))
-    check_output_dir(site, "-o" if a.output else "report directory")
-    bench = a.benchmarks
-    if bench is None and Path(".benchmarks").is_dir():
-        bench = Path(".benchmarks")
-    if bench is not None and not bench.is_dir():
-        raise UserError(f"bad --benchmarks {bench}: not a directory")
-    index = build_site([Path(d) for d in a.dirs], site, thresholds, bench, log=sys.stderr)
+    index = build_report([Path(d) for d in a.dirs], a.output, accuracy=_accuracies(a.accuracy),
+                         benchmarks=a.benchmarks, log=sys.stderr)
     print(f"gnibench: report: {index}", file=sys.stderr)
     return 0
 

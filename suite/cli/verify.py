@@ -1,46 +1,41 @@
 """``gnibench verify [ID...|all] [--scale quick|paper] [-j N] [--list] [--format json] [-o DIR]``.
 
-Runs what the chosen claims need (through the runner: parallel, resumable, one store in ``DIR``,
-by default ``results/seeds``, the same as ``gnibench reproduce``'s, so either reuses the cells the
-other ran), judges each claim from the tables, prints the verdict per claim with the measured
-number beside the seed's, writes ``DIR/ledger.parquet``, ``DIR/ledger.md`` and the report site of
-``DIR`` (``DIR/report``, figures and ledger together), and exits with 1
-when a verdict differs from its ``expected`` one (a known failure that starts to pass, or the
-reverse), else 0.
+A shell on the library (:func:`gnibench.suite.api.verifying.check_claims`): it runs what the
+chosen claims need (through the runner: parallel, resumable, one store in ``DIR``, by default
+``results/seeds``, the same as ``gnibench reproduce``'s, so either reuses the cells the other
+ran), judges each claim from the tables, writes ``DIR/ledger.parquet``, ``DIR/ledger.md`` and the
+report site of ``DIR`` (``DIR/report``, figures and ledger together). This module prints the
+verdict per claim with the measured number beside the seed's and exits with 1 when a verdict
+differs from its ``expected`` one (a known failure that starts to pass, or the reverse), else 0.
 """
 from __future__ import annotations
 
 import json
 import math
 import sys
-from pathlib import Path
 
 from gnibench.suite.foundation.errors import UserError
 
-SCALES = ("quick", "paper")
-
 
 def verify_command(a) -> int:
-    from gnibench.suite.ledger.verify import needed_experiments, select_claims
+    """``gnibench verify``: the arguments to :func:`gnibench.suite.api.verifying.check_claims`,
+    its verdicts printed (text or JSON), the exit code."""
+    from gnibench.suite.api.verifying import check_claims, check_scale
+    from gnibench.suite.ledger.verify import select_claims
 
-    if a.scale not in SCALES:
-        raise UserError(f"bad --scale {a.scale!r}; allowed: {', '.join(SCALES)}")
+    check_scale(a.scale)
     if a.format not in ("text", "json"):
         raise UserError(f"bad --format {a.format!r}; allowed: text, json")
     if getattr(a, "mutants", None):
         return mutants_command(a)
-    claims = select_claims(a.claims)
     if a.list:
-        return _list(claims, a)
-    from gnibench.suite.runs import executors
-
-    executors.check(a.executor, a.jobs, a.scheduler)
-    from gnibench.suite.runs.reproduce import DEFAULT_DIR
-
-    out = a.output if a.output is not None else DEFAULT_DIR
-    experiments = _load(needed_experiments(claims, a.scale), a.scale)
-    dirs = _run(experiments, out, a)
-    return _judge(claims, dirs, out, a)
+        return _list(select_claims(a.claims), a)
+    ledger = check_claims(a.claims, scale=a.scale, output=a.output, jobs=a.jobs,
+                          executor=a.executor, scheduler=a.scheduler, report=not a.no_report)
+    _print(ledger, a.format)
+    if ledger.report is not None:
+        print(f"gnibench: verify: report {ledger.report}", file=sys.stderr)
+    return _summary(ledger)
 
 
 def _list(claims, a) -> int:
@@ -63,36 +58,10 @@ def _list(claims, a) -> int:
     return 0
 
 
-def _load(names: list[str], scale: str) -> list:
-    from gnibench.suite.runs.experiment import load_experiment
-
-    return [load_experiment(name, scale) for name in names]
-
-
-def _run(experiments, out: Path, a) -> dict[str, Path]:
-    from gnibench.suite.runs.runner import run_experiments
-
-    outs = [out / e.name for e in experiments]
-    if experiments:
-        run_experiments(experiments, outs, out, jobs=a.jobs, executor=a.executor,
-                        scheduler=a.scheduler, name="verify")
-    return {e.name: o for e, o in zip(experiments, outs)}
-
-
-def _judge(claims, dirs, out: Path, a) -> int:
-    from gnibench.reports.ledger import render_ledger
-    from gnibench.suite.foundation.cache import atomic_write
-    from gnibench.suite.foundation.provenance import versions
-    from gnibench.suite.ledger.verdicts import VERDICT_ORDER, Results
-    from gnibench.suite.ledger.verify import judge, ledger_table, write_ledger
-
-    verdicts = judge(claims, Results(dirs), a.scale)
-    meta = {"scale": a.scale, "versions": versions(),
-            "experiments": {k: str(v) for k, v in dirs.items()}}
-    write_ledger(verdicts, out, meta)
-    text = render_ledger(ledger_table(verdicts), meta)
-    atomic_write(out / "ledger.md", lambda p: Path(p).write_text(text, encoding="utf-8"))
-    if a.format == "json":
+def _print(ledger, form: str) -> None:
+    """The verdicts on stdout: one line per claim, or JSON."""
+    verdicts = ledger.verdicts
+    if form == "json":
         rows = [{"id": v.id, "citation": v.citation, "verdict": v.verdict,
                  "expected": v.expected, "outcome": v.outcome, "unexpected": v.unexpected,
                  "measured": _jsonable(v.measured), "seed_value": v.seed_value,
@@ -101,27 +70,28 @@ def _judge(claims, dirs, out: Path, a) -> int:
                  "not_measured": v.not_measured, "runs": [r.describe() for r in v.runs]}
                 for v in verdicts]
         print(json.dumps(rows, indent=1))
-    else:
-        for v in verdicts:
-            flag = f"  UNEXPECTED (expected {v.expected})" if v.unexpected else ""
-            measured = v.row()["measured_text"]
-            print(f"{v.id:<24} {v.verdict:<15} measured {measured or '-':<14} seed: "
-                  f"{v.seed_value or '-'}{'  [' + v.figure + ']' if v.figure else ''}{flag}")
-            if v.verdict == "error":                  # why: the entry to fix
-                print(f"{'':<24} {v.detail}")
-    if not getattr(a, "no_report", False):
-        from gnibench.reports.site import build_site
+        return
+    for v in verdicts:
+        flag = f"  UNEXPECTED (expected {v.expected})" if v.unexpected else ""
+        measured = v.row()["measured_text"]
+        print(f"{v.id:<24} {v.verdict:<15} measured {measured or '-':<14} seed: "
+              f"{v.seed_value or '-'}{'  [' + v.figure + ']' if v.figure else ''}{flag}")
+        if v.verdict == "error":                  # why: the entry to fix
+            print(f"{'':<24} {v.detail}")
 
-        index = build_site([out], out / "report")
-        print(f"gnibench: verify: report {index}", file=sys.stderr)
-    unexpected = [v.id for v in verdicts if v.unexpected]
+
+def _summary(ledger) -> int:
+    """The counts per verdict on stderr; exit 1 when a verdict differs from its expected one."""
+    from gnibench.suite.ledger.verdicts import VERDICT_ORDER
+
+    verdicts = ledger.verdicts
     counts = {k: sum(v.verdict == k for v in verdicts) for k in VERDICT_ORDER}
     print(f"gnibench: verify: {len(verdicts)} claims: "
           + ", ".join(f"{n} {k}" for k, n in counts.items())
-          + f"; {len(unexpected)} differ from the expected verdict or failed to measure "
-          f"(the expected verdicts are a regression record, not evidence); ledger in {out}",
-          file=sys.stderr)
-    return 1 if unexpected else 0
+          + f"; {len(ledger.unexpected)} differ from the expected verdict or failed to measure "
+          f"(the expected verdicts are a regression record, not evidence); ledger in "
+          f"{ledger.output}", file=sys.stderr)
+    return 1 if ledger.unexpected else 0
 
 
 def mutants_command(a) -> int:
@@ -132,11 +102,11 @@ def mutants_command(a) -> int:
     or tests killed each mutant, writes ``DIR/mutants.json`` (default DIR:
     results/seeds, beside the ledger, so that its report page shows the score), exit 0 when every
     mutant was killed, 1 when some survived."""
+    from gnibench.suite.api.verifying import check_scale
     from gnibench.suite.ledger import mutants
     from gnibench.suite.ledger.verify import select_claims
 
-    if a.scale not in SCALES:
-        raise UserError(f"bad --scale {a.scale!r}; allowed: {', '.join(SCALES)}")
+    check_scale(a.scale)
     catalog, _ = mutants.load_catalog()
     known = {m.id: m for m in catalog}
     if a.mutants == "all":

@@ -5,7 +5,27 @@ import difflib
 
 
 class UserError(Exception):
-    """Bad input from the user (a spec, an option, a file). The CLI prints it on one line, exit 2."""
+    """Bad input from the user: a spec, an option, an argument, a file.
+
+    Raised before any work is done (nothing is run or written), with one line that names the bad
+    value and what is allowed. The command line prints that line (``gnibench: error: ...``) and
+    exits with code 2; the Python API (``gnibench.UserError``) raises it. A diverging integration
+    is not an error: it is a status of the cell.
+
+    Examples
+    --------
+    >>> import gnibench
+    >>> try:
+    ...     gnibench.solve("kepler-2d", "rk5:h=0.01", steps=10)
+    ... except gnibench.UserError as e:
+    ...     print(e)                                    # doctest: +ELLIPSIS
+    unknown method 'rk5'; did you mean 'rk4'? (known: ...)
+    >>> try:
+    ...     gnibench.solve("kepler-2d", "rk4:h=0.01", t_end="10")
+    ... except gnibench.UserError as e:
+    ...     print(e)
+    gnibench.solve: bad t_end '10' (a str); allowed: a number, or None
+    """
 
 
 def edit_distance(a: str, b: str) -> int:

@@ -146,17 +146,23 @@ class Bound:
     def id(self) -> str:
         return self.record.id
 
-    def text(self) -> str:
-        """Canonical ``id:key=value,...``: relevant, non-None values in schema order; options marked
-        ``show_default=False`` (solver tuning such as newton_maxit) only when not at their default."""
-        parts = []
+    def options(self) -> dict[str, str]:
+        """The options of the canonical text, name -> value text: relevant, non-None values in
+        schema order; options marked ``show_default=False`` (solver tuning such as
+        newton_maxit) only when not at their default."""
+        out = {}
         for p in self.record.params:
             v = self.values.get(p.name)
             if v is None or not _relevant(p, self.values):
                 continue
             if not p.show_default and v == p.default:
                 continue
-            parts.append(f"{p.name}={p.format(v)}")
+            out[p.name] = p.format(v)
+        return out
+
+    def text(self) -> str:
+        """Canonical ``id:key=value,...`` (:meth:`options`)."""
+        parts = [f"{k}={v}" for k, v in self.options().items()]
         return self.record.id + (":" + ",".join(parts) if parts else "")
 
 

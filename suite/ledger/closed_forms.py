@@ -28,10 +28,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from gnibench.suite.cell.spec import item_id, structure
 from gnibench.suite.ledger import (closed_forms_b7, closed_forms_b41, closed_forms_hlw,
                                    closed_forms_locator)
 from gnibench.suite.ledger.closed_forms_b6 import gs_section_trace
+from gnibench.suite.runs.tables import modifier_ids
 
 #: integrals of the oscillator problems as combinations of the per-oscillator energies E_k
 _ENERGIES = {"harmonic-oscillator": {"states": (("q", "p"),), "H": (1.0,)},
@@ -89,7 +89,7 @@ def euler_oscillator_energy(cells, samples) -> dict:
     selected cells; also the fitted and closed-form growth rates of ln|err| per step."""
     deviation, rates, closed = 0.0, [], []
     for row in cells.itertuples():
-        pid = item_id(row.problem)
+        pid = row.problem_id
         spec = _ENERGIES[pid]
         names = [k for k in spec if k != "states"]
         h, observed = _method(row.method)
@@ -172,14 +172,14 @@ def euler_observer_improvement(cells, samples) -> dict:
     ``ratio_deviation`` = the largest relative deviation of the runs' ratio from the ratio the
     recurrence E_k <- E_k((1 + h s_k)² + h²) predicts (closed form, module docstring)."""
     def observes(r) -> bool:
-        return any(m.id == "observer" for m in structure(r.method, "method").modifiers)
+        return "observer" in modifier_ids(r.modifiers)
 
     plain = [r for r in cells.itertuples() if not observes(r)]
     observed = [r for r in cells.itertuples() if observes(r)]
     if len(plain) != 1 or len(observed) != 1:
         raise LookupError("select one plain Euler cell and one Euler + observer cell")
     (p,), (o,) = plain, observed
-    pid = item_id(o.problem)
+    pid = o.problem_id
     spec = _ENERGIES[pid]
     names = [k for k in spec if k != "states"]
     C = np.array([spec[n] for n in names])

@@ -11,7 +11,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from gnibench.suite.cell.spec import item_id
 
 
 def _rows(samples, cell):
@@ -122,7 +121,7 @@ def pendulum_asymmetry(cells, samples) -> dict:
     ``growth_exponent_H`` and ``late_early_ratio_H``: the largest over the cells (metric growth)."""
     out: dict[str, float] = {}
     for row in cells.itertuples():
-        key = {"symplectic-euler": "se", "stormer-verlet": "sv"}.get(item_id(row.method, "method"))
+        key = {"symplectic-euler": "se", "stormer-verlet": "sv"}.get(row.base_method)
         if key is None:
             raise ValueError(f"asymmetry is for symplectic Euler and Störmer–Verlet, not {row.method}")
         rows = _rows(samples, row.cell)

@@ -65,12 +65,12 @@ def accepted_points(row, problem, method, t_star: np.ndarray):
     """(t_n, y_n, t_n+1) of the accepted step holding each crossing time, from a re-run of the cell
     with a sample at every step, checked to be the run (module docstring, 1)."""
     from gnibench.suite.cell.compiled import problem_kernel
-    from gnibench.suite.cell.driver import integrate
+    from gnibench.suite.cell.solve import solve
 
     if np.isfinite(row.t_end):
-        traj = integrate(problem, method, t_end=float(row.t_end), every=1)
+        traj = solve(problem, method, t_end=float(row.t_end), reference="none")
     else:
-        traj = integrate(problem, method, steps=int(row.steps_planned), every=1)
+        traj = solve(problem, method, steps=int(row.steps_planned), reference="none")
     T, Y = traj.t, np.ascontiguousarray(traj.y, dtype=np.float64)
     if not len(t_star):
         return T[:0], Y[:0], T[:0]

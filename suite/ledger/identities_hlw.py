@@ -26,14 +26,15 @@ def lv_invariant() -> dict:
 def _forth_and_back(method: str, h: float, steps: int = 100) -> float:
     """|Φ_{−h}^n(Φ_h^n(y0)) − y0| / |y0| on the pendulum: n steps forward, then n steps backward
     from the point reached (the driver facade, ``reverse=True``)."""
-    from gnibench.suite.cell.driver import integrate
+    from gnibench.suite.cell.solve import solve
     from gnibench.suite.cell.spec import prepare
 
     bound, cfg = prepare("pendulum:p0=0.3,q0=1.0", f"{method}:h={h!r}")
-    y_n = integrate(bound, cfg, steps=steps, every=steps).y[-1]
+    y_n = solve(bound, cfg, steps=steps, every=steps, reference="none").y[-1]
     start = ",".join(f"{s}0={float(v)!r}" for s, v in zip(bound.record.state, y_n))
     back, cfg = prepare(f"pendulum:{start}", f"{method}:h={h!r}")
-    y_back = integrate(back, cfg, steps=steps, every=steps, reverse=True).y[-1]
+    y_back = solve(back, cfg, steps=steps, every=steps, reference="none",
+                   reverse=True).y[-1]
     y0 = np.array(bound.record.y0(bound.values))
     return float(np.linalg.norm(y_back - y0) / np.linalg.norm(y0))
 

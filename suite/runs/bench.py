@@ -29,7 +29,8 @@ from importlib import resources
 from pathlib import Path
 
 import numpy as np
-from gnibench.suite.cell.driver import UNLIMITED, integrate
+from gnibench.suite.cell.calls import UNLIMITED
+from gnibench.suite.cell.solve import solve
 from gnibench.suite.cell.spec import prepare
 
 PROBLEM = "kepler-2d"
@@ -46,14 +47,14 @@ def compiled_cell(method: str, problem: str = PROBLEM, h: float = H):
     bound, cfg = prepare(problem, f"{method}:h={h!r}")
     if cfg.modifiers:
         raise ValueError("bench cells take no modifiers")
-    integrate(bound, cfg, steps=1, budget=None)         # warm-up: loads or compiles every function
+    solve(bound, cfg, steps=1, budget=None, reference="none")     # warm-up: loads or compiles every function
     return bound, cfg
 
 
 def run_steps(bound, cfg, steps: int):
     """One timed integration of ``steps`` steps through the driver facade in a single call of the
     compiled driver, sampled only at the end: (seconds inside the compiled call, final state)."""
-    traj = integrate(bound, cfg, steps=steps, every=steps, budget=None)
+    traj = solve(bound, cfg, steps=steps, every=steps, budget=None, reference="none")
     if traj.status != "ok" or traj.steps[-1] != steps:
         raise RuntimeError(f"bench run stopped early: {traj.status} after {traj.steps[-1]} steps")
     return traj.wall_seconds, traj.y[-1].copy()
@@ -181,7 +182,7 @@ def run_adaptive(bound, cfg, t_end: float):
     """One timed adaptive integration to t_end through the driver facade (h0 = 0: HINIT,
     hmax = t_end), sampled only at the end: (seconds inside the compiled call, accepted,
     rejected, nfev, final state)."""
-    traj = integrate(bound, cfg, t_end=t_end, every=UNLIMITED, budget=None)
+    traj = solve(bound, cfg, t_end=t_end, every=UNLIMITED, budget=None, reference="none")
     if traj.status != "ok":
         raise RuntimeError(f"adaptive bench run stopped: {traj.status}")
     return (traj.wall_seconds, int(traj.steps[-1]), int(traj.rejected[-1]), float(traj.nfev[-1]),

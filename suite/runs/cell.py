@@ -39,7 +39,7 @@ class Cell:
 
     @property
     def method_kind(self) -> str:
-        return self.spec.kind
+        return self.spec.method_kind
 
     @property
     def h(self) -> float:

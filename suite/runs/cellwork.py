@@ -56,7 +56,7 @@ def run_cell(cell, report: Callable[[int, float], None] | None = None,
     """Solve one cell (its typed cell, ``cell.spec``, as it is), apply its metrics, and build its
     rows. ``frames=False``: the samples are left as columns (a dict of arrays; a pool worker
     builds no DataFrame and never imports pandas), made a table by :func:`with_frame`."""
-    from gnibench.suite.cell.solve import solve_cell
+    from gnibench.suite.cell.driver import integrate
     from gnibench.suite.metrics.compute import apply
     from gnibench.suite.runs.tables import cell_row, cell_sample_columns, cell_samples, timing_row
 
@@ -64,7 +64,7 @@ def run_cell(cell, report: Callable[[int, float], None] | None = None,
     progress = _throttled(cell.id, report) if report is not None else None
     try:
         with np.errstate(all="ignore"):     # overflow in a diverging cell is a status, not noise
-            traj = solve_cell(cell.spec, progress=progress)
+            traj = integrate(cell.spec, progress=progress)
             metrics, skipped = apply(traj, cell.spec.metrics, problem=cell.spec.problem,
                                      families=False)
             samples = cell_samples(cell, traj, metrics) if frames else \

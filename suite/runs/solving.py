@@ -71,15 +71,14 @@ def solve_cell_spec(problem, method, *, steps: int | None = None, t_end: float |
 def solve_output(cell, progress=None) -> SolveOutput:
     """Solve a typed cell (:func:`solve_cell_spec`) and build its table and metadata; Ctrl-C is
     kept in ``interrupted`` with the samples computed so far."""
-    from gnibench.suite.cell.driver import Interrupted
-    from gnibench.suite.cell.solve import solve_cell
+    from gnibench.suite.cell.driver import Interrupted, integrate
     from gnibench.suite.metrics.compute import apply
     from gnibench.suite.runs.storage import provenance
     from gnibench.suite.runs.tables import sample_columns
 
     interrupted = None
     try:
-        traj = solve_cell(cell, progress=progress)
+        traj = integrate(cell, progress=progress)
     except Interrupted as e:                  # keep what was computed
         traj, interrupted = e.partial, e
     out, skipped = apply(traj, cell.metrics, problem=cell.problem)

@@ -17,6 +17,13 @@ if TYPE_CHECKING:
     import pandas as pd
 
 SAMPLE_FRONT = ("cell", "problem", "method", "t", "steps", "nfev")
+#: between the ids of the column ``modifiers`` of cells.parquet (``observer+projection``)
+MODIFIER_SEPARATOR = "+"
+
+
+def modifier_ids(column_value) -> list[str]:
+    """The modifier ids of a cell, from its column ``modifiers``."""
+    return [m for m in str(column_value or "").split(MODIFIER_SEPARATOR) if m]
 STATUSES = TABLE_STATUSES
 
 
@@ -112,8 +119,14 @@ def cell_row(cell, traj=None, metrics=None, status: str = "pending", reason: str
     from gnibench.suite.metrics.families import join_metrics
 
     notes = "; ".join(f"{k}: {v}" for k, v in (skipped or {}).items())
+    spec = cell.spec
+    family = spec.method.family()
     row = {"cell": cell.id, "group": cell.group, "label": cell.label, "problem": cell.problem,
-           "method": cell.method, "method_kind": cell.method_kind, "h": cell.h,
+           "method": cell.method, "problem_id": spec.problem.id, "base_method": spec.method.id,
+           "modifiers": MODIFIER_SEPARATOR.join(m.id for m in spec.method.modifiers),
+           "method_kind": cell.method_kind,
+           "family": family.label, "sweep": family.sweep, "sweep_value": family.value,
+           "adaptive": family.adaptive, "h": cell.h,
            "t_end": np.nan if cell.t_end is None else cell.t_end,
            "steps_planned": cell.nsteps, "every": cell.every,
            "dt_out": np.nan if cell.dt_out is None else cell.dt_out,
@@ -180,9 +193,12 @@ def samples_table(parts: list[tuple[pd.DataFrame, tuple[str, ...]]],
     return missing_steps(df[list(SAMPLE_FRONT) + states + errors + tail + rest].copy())
 
 
-_CELL_COLUMNS = ("cell", "group", "label", "problem", "method", "method_kind", "h", "t_end", "steps_planned",
-                 "every", "dt_out", "section", "status", "reason", "steps", "t_final", "nfev", "njev", "samples",
-                 "integrals", "reference", "metrics", "metric_notes")
+#: the columns of cells.parquet before the per-cell metric values (suite/experiments/README.md)
+CELL_COLUMNS = ("cell", "group", "label", "problem", "method", "problem_id", "base_method",
+                "modifiers", "method_kind", "family", "sweep", "sweep_value", "adaptive", "h",
+                "t_end", "steps_planned", "every", "dt_out", "section", "status", "reason", "steps",
+                "t_final", "nfev", "njev", "samples", "integrals", "reference", "metrics",
+                "metric_notes")
 
 
 def cells_table(rows: list[dict]) -> pd.DataFrame:
@@ -191,14 +207,14 @@ def cells_table(rows: list[dict]) -> pd.DataFrame:
     import pandas as pd
 
     if not rows:                         # a figure of fields only has no cells
-        return pd.DataFrame({c: pd.Series(dtype="object") for c in _CELL_COLUMNS})
+        return pd.DataFrame({c: pd.Series(dtype="object") for c in CELL_COLUMNS})
     df = pd.DataFrame(sorted(rows, key=lambda r: r["cell"]))
     for col in ("steps", "samples"):
         df[col] = df[col].astype("Int64")
     errs = [c for c in df.columns if c.startswith("max_abs_err_")]
     glob = ["final_global_error", "max_global_error"]
-    extra = [c for c in df.columns if c not in _CELL_COLUMNS and c not in errs and c not in glob]
-    return df[list(_CELL_COLUMNS) + errs + glob + extra]
+    extra = [c for c in df.columns if c not in CELL_COLUMNS and c not in errs and c not in glob]
+    return df[list(CELL_COLUMNS) + errs + glob + extra]
 
 
 def timings_table(rows: list[dict]) -> pd.DataFrame:

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 from gnibench.methods.kernels import slots
 from gnibench.suite.cell.calls import Buffers
-from gnibench.suite.cell.driver import integrate
 from gnibench.suite.cell.drivers import AdaptiveDriver, FixedStepDriver
+from gnibench.suite.cell.solve import solve
 from gnibench.suite.cell.spec import prepare
 from gnibench.suite.foundation.errors import UserError
 
@@ -76,7 +76,7 @@ def test_driver_objects_read_their_state_by_name():
     t, _, c = buffers.arrays()
     assert status == "ok" and drv.t == t[-1] == 2 * math.pi
     assert drv.steps == c[-1, 0] and drv.nfev == c[-1, 1] and drv.rejected == c[-1, 3]
-    traj = integrate(problem, method, t_end=2 * math.pi)
+    traj = solve(problem, method, t_end=2 * math.pi)
     assert np.array_equal(traj.t, t) and traj.steps[-1] == drv.steps
 
     problem, method = prepare("kepler-2d", "rk4:h=0.1")
@@ -89,10 +89,10 @@ def test_driver_objects_read_their_state_by_name():
 def test_reverse_retraces_a_symmetric_method_and_not_rk4():
     def back_and_forth(spec):
         problem, method = prepare("pendulum:p0=0.3,q0=1.0", spec)
-        y_n = integrate(problem, method, steps=200, every=200).y[-1]
+        y_n = solve(problem, method, steps=200, every=200).y[-1]
         start = ",".join(f"{s}0={float(v)!r}" for s, v in zip(problem.record.state, y_n))
         back = prepare(f"pendulum:{start}", spec)[0]
-        traj = integrate(back, method, steps=200, every=200, reverse=True)
+        traj = solve(back, method, steps=200, every=200, reverse=True)
         assert traj.t[-1] == pytest.approx(-200 * 0.05) and traj.provenance["reverse"]
         return float(np.max(np.abs(traj.y[-1] - np.array(problem.record.y0(problem.values)))))
 
@@ -105,15 +105,15 @@ def test_reverse_retraces_a_symmetric_method_and_not_rk4():
 def test_reverse_is_refused_where_it_does_not_apply(spec, kw):
     problem, method = prepare("kepler-2d", spec)
     with pytest.raises(UserError, match="reverse"):
-        integrate(problem, method, reverse=True, **kw)
+        solve(problem, method, reverse=True, **kw)
 
 
 def test_a_moved_point_is_not_given_the_fsal_stage_of_the_unmoved_one():
     """dopri5's last stage is f(y1): reused as the next first stage only when neither +projection
     nor post_step moved y1; here every accepted step is projected, so every one costs f(y_n+1) on
     top of HINIT's 2 and the 6 new stages per attempt."""
-    traj = integrate(*prepare("kepler-2d", "dopri5:rtol=1e-8,atol=1e-8+projection:on=H/L"),
+    traj = solve(*prepare("kepler-2d", "dopri5:rtol=1e-8,atol=1e-8+projection:on=H/L"),
                      t_end=20.0)
-    plain = integrate(*prepare("kepler-2d", "dopri5:rtol=1e-8,atol=1e-8"), t_end=20.0)
+    plain = solve(*prepare("kepler-2d", "dopri5:rtol=1e-8,atol=1e-8"), t_end=20.0)
     for tr, extra in ((traj, traj.steps[-1]), (plain, 0)):
         assert tr.nfev[-1] == 2 + 6 * (tr.steps[-1] + tr.rejected[-1]) + extra

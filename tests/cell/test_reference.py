@@ -273,7 +273,7 @@ def test_external_methods_through_solve(method, bound):
 
 
 def test_external_methods_are_listed_with_their_properties():
-    from gnibench.suite.cli.listing import listing
+    from gnibench.suite.api.listing import listing
 
     rows = {r["id"]: r for r in listing("methods")}
     assert rows["heyoka-taylor"]["order"] == 20 and rows["heyoka-taylor"]["properties"]["adaptive"]

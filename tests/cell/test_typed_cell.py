@@ -14,8 +14,9 @@ import pytest
 from gnibench.methods import COMPILED, METHODS
 from gnibench.methods.base import KINDS
 from gnibench.suite.cell.cellspec import CellSpec
-from gnibench.suite.cell.solve import solve, solve_cell
-from gnibench.suite.cell.spec import item_id, parse_method, parse_problem, prepare, structure
+from gnibench.suite.cell.driver import integrate
+from gnibench.suite.cell.solve import solve
+from gnibench.suite.cell.spec import parse_method, parse_problem, prepare, structure
 from gnibench.suite.cli.main import main
 from gnibench.suite.foundation.errors import UserError
 from gnibench.suite.metrics.cells import make_cell
@@ -49,7 +50,7 @@ def test_cell_is_typed_and_pickles_by_registry_reference():
     assert back.spec.method.base.record is spec.method.base.record      # the registry's record
     assert back.spec.metrics[1].metric is spec.metrics[1].metric
     engine = parse_experiment(EXPERIMENT, "typed.toml").cells[1]
-    assert engine.spec.kind == "external" and engine.spec.method.base.values["dt_out"] > 0
+    assert engine.spec.method_kind == "external" and engine.spec.method.base.values["dt_out"] > 0
 
 
 def test_a_fresh_interpreter_resolves_the_records_it_unpickles(tmp_path):
@@ -80,7 +81,7 @@ def test_text_and_typed_values_give_the_same_cell_and_samples():
     assert a == b and a.problem_text == "pendulum:p0=1.4,q0=0"
     t1 = solve("pendulum:p0=1.4,q0=0", "stormer-verlet:h=0.1", steps=50, every=10)
     t2 = solve(p, m, steps=50, every=10)
-    t3 = solve_cell(a)
+    t3 = integrate(a)
     assert np.array_equal(t1.y, t2.y) and np.array_equal(t1.y, t3.y)
     # a method parsed without the problem is checked against it (modifiers resolved)
     loose = parse_method("rk4:h=0.01+observer:theta=3")
@@ -121,18 +122,37 @@ def test_ledger_closed_forms_read_spec_ids_not_prefixes():
 
     t = np.linspace(0.0, 1.0, 5)
     samples = pd.DataFrame({"cell": [0] * 5, "t": t, "q": np.sin(t), "p": np.cos(t)})
-    cells = pd.DataFrame({"cell": [0], "method": ["symplectic-euler:h=0.3"]})
+    cells = pd.DataFrame({"cell": [0], "method": ["symplectic-euler:h=0.3"],
+                          "base_method": ["symplectic-euler"]})
     assert set(pendulum_asymmetry(cells, samples)) == {"se"}
     with pytest.raises(ValueError, match="not symplectic-euler-adjoint"):
-        pendulum_asymmetry(cells.assign(method="symplectic-euler-adjoint:h=0.3"), samples)
+        pendulum_asymmetry(cells.assign(method="symplectic-euler-adjoint:h=0.3",
+                                        base_method="symplectic-euler-adjoint"), samples)
+
+
+@pytest.mark.parametrize("spec, family", [
+    ("dopri5:adaptive=true,rtol=1e-08,atol=1e-08", ("dopri5", "rtol", 1e-8, True)),
+    ("merson:adaptive=true,rtol=1e-05,atol=1e-06", ("merson:adaptive=true", "rtol", 1e-5, True)),
+    ("heyoka-taylor:dt_out=0.01,tol=1e-10,precision=long double",
+     ("heyoka-taylor:precision=long double", "tol", 1e-10, True)),
+    ("rk4:h=0.1+observer:mode=simple,on=H/L,theta=1/1",
+     ("rk4+observer:mode=simple,on=H/L,theta=1/1", "h", 0.1, False)),
+    ("dopri5:adaptive=false,h=0.05", ("dopri5:adaptive=false", "h", 0.05, False)),
+])
+def test_method_families_come_from_the_typed_method(spec, family):
+    """The family of a method (cells.parquet's columns family, sweep, sweep_value, adaptive)
+    from its typed values, not from its text."""
+    _, method = prepare("kepler-2d", spec)
+    f = method.family()
+    assert (f.label, f.sweep, f.value, f.adaptive) == family
 
 
 def test_structure_of_spec_texts():
     s = structure("rk4:h=1e+6+observer:on=H/L,theta=2+projection")
-    assert s.id == "rk4" and s.key == "rk4+observer+projection"
+    assert s.id == "rk4" and [m.id for m in s.modifiers] == ["observer", "projection"]
     assert s.base.given == {"h": "1e+6"} and s.modifier("observer").given["on"] == "H/L"
     assert s.without("h").text() == "rk4+observer:on=H/L,theta=2+projection"
-    assert item_id("kepler-2d:e=0.6") == "kepler-2d"
+    assert structure("kepler-2d:e=0.6", "problem").id == "kepler-2d"
     with pytest.raises(UserError, match="expected key=value"):
         structure("rk4:h")
 
@@ -159,5 +179,74 @@ def test_cells_table_says_how_each_method_runs(tmp_path):
     assert main(["run", str(path), "-o", str(tmp_path / "out"), "-j", "1", "--no-report"]) == 0
     cells = pd.read_parquet(tmp_path / "out" / "cells.parquet")
     assert list(cells["method_kind"]) == ["compiled", "external"]
-    assert list(cells.columns[:7]) == ["cell", "group", "label", "problem", "method",
-                                       "method_kind", "h"]
+    assert list(cells.columns[:14]) == ["cell", "group", "label", "problem", "method",
+                                        "problem_id", "base_method", "modifiers", "method_kind",
+                                        "family", "sweep", "sweep_value", "adaptive", "h"]
+    # the parts of the specs, from the typed cells (the reports read them, never the texts)
+    assert list(cells["problem_id"]) == ["kepler-2d", "kepler-2d"]
+    assert list(cells["base_method"]) == ["rk4", "heyoka-taylor"]
+    assert list(cells["modifiers"]) == ["observer", ""]
+    assert list(cells["family"]) == ["rk4+observer:mode=simple,on=H/L,theta=2/2", "heyoka-taylor"]
+    assert list(cells["sweep"]) == ["h", "tol"] and list(cells["adaptive"]) == [False, True]
+    assert cells["sweep_value"].tolist() == [0.01, 1e-12]
+
+
+CELL_KINDS = [  # problem, method, options, kind
+    ("kepler-2d", "rk4:h=0.05", {"steps": 40, "every": 8}, "fixed step"),
+    ("kepler-2d", "rk4:h=0.05", {"t_end": 2.0, "dt_out": 0.5}, "fixed step"),
+    ("kepler-2d", "dopri5:rtol=1e-8,atol=1e-8", {"t_end": 2.0}, "adaptive"),
+    ("kepler-2d", "scipy-rk45:rtol=1e-8,atol=1e-8", {"t_end": 2.0, "dt_out": 0.5}, "engine"),
+    ("kepler-3d:ks=true", "rk4:h=0.01", {"steps": 50}, "transformed"),
+    ("henon-heiles", "dop853:rtol=1e-10,atol=1e-10", {"t_end": 100.0, "section": 3}, "section"),
+    ("henon-heiles", "scipy-dop853:rtol=1e-10,atol=1e-10,dt_out=0.05", {"t_end": 30.0,
+                                                                        "section": 2}, "section"),
+]
+
+
+@pytest.mark.parametrize("problem, method, options, kind", CELL_KINDS)
+def test_integrate_takes_the_typed_cell_as_it_is(monkeypatch, problem, method, options, kind):
+    """A cell is validated once, by build(): integrate(cell) dispatches on its kind and checks
+    nothing again (the horizon, the budgets, every, dt_out: each check made to fail after
+    build() and the integration still runs, with the same samples)."""
+    import sys
+
+    from gnibench.suite.cell import cellspec, grid, timegrid
+    from gnibench.suite.cell.cellspec import build
+    from gnibench.suite.foundation import budgets
+
+    cell = build(problem, method, **options)
+    assert cell.kind == kind
+    expected = integrate(cell)
+
+    def refused(*a, **k):
+        raise AssertionError("checked again after build()")
+
+    checks = [grid.grid, budgets.check_count, budgets.check_output, budgets.check_integer,
+              cellspec.check_budgets, cellspec.build, timegrid.check_dt_out,
+              timegrid.effective_dt_out, timegrid.engine_method]
+    for name, module in list(sys.modules.items()):     # wherever they were imported by name
+        if name.startswith("gnibench."):
+            for attr, value in list(vars(module).items()):
+                if any(value is f for f in checks):
+                    monkeypatch.setattr(module, attr, refused)
+    again = integrate(cell)
+    assert again.status == "ok" and np.array_equal(again.y, expected.y) and len(again.t) > 1
+
+
+@pytest.mark.parametrize("problem, method, options, message", [
+    ("kepler-2d", "dopri5", {"steps": 10}, "needs --t-end T"),
+    ("kepler-3d:ks=true", "scipy-rk45", {"t_end": 1.0}, "cannot integrate the transformed"),
+    ("kepler-2d", "rk4", {"steps": 10, "locator": "dense"}, "applies to section crossings only"),
+    ("henon-heiles", "rk4:h=0.01", {"t_end": 7.0, "section": 1, "locator": "dense"},
+     "dense output does not locate"),
+    ("henon-heiles", "rk4:h=0.01", {"t_end": 7.0, "section": 1, "locator": "newton"},
+     "bad locator 'newton'"),
+    ("kepler-2d", "dopri5", {"t_end": 1.0, "reverse": True}, "reverse=True applies"),
+])
+def test_what_does_not_apply_is_refused_when_the_cell_is_made(problem, method, options, message):
+    """Refusals that the driver facade used to make in the middle of a run are made by build(),
+    before any work."""
+    from gnibench.suite.cell.cellspec import build
+
+    with pytest.raises(UserError, match=message):
+        build(problem, method, **options)

@@ -79,9 +79,9 @@ def test_records_reach_a_process_that_never_loaded_them(tmp_path):
     path = tmp_path / "cell.pickle"
     path.write_bytes(pickle.dumps(cell))
     code = ("import pickle, sys\n"
-            "from gnibench.suite.cell.solve import solve_cell\n"
+            "from gnibench.suite.cell.driver import integrate\n"
             "cell = pickle.loads(open(sys.argv[1], 'rb').read())\n"
-            "print(cell.method_text, repr(float(solve_cell(cell).y[-1, 0])))\n")
+            "print(cell.method_text, repr(float(integrate(cell).y[-1, 0])))\n")
     out = subprocess.run([sys.executable, "-c", code, str(path)], capture_output=True, text=True,
                          check=True, cwd=tmp_path).stdout.split()
     here = solve("oscillator:omega=2", "triple-jump:h=0.05", steps=10)

@@ -13,6 +13,7 @@ import gnibench
 import numpy as np
 import pandas as pd
 import pytest
+from gnibench.suite.api.listing import METHOD_COLUMNS, METRIC_COLUMNS, PROBLEM_COLUMNS
 from gnibench.suite.cli.main import main
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -92,25 +93,64 @@ def test_api_only_errors():
         gnibench.solve("kepler-2d", "rk4")
 
 
-def test_listings_are_gnibench_list(capsys):
-    for what, fn in (("problems", gnibench.problems), ("methods", gnibench.methods),
-                     ("metrics", gnibench.metrics)):
-        assert main(["list", what, "--format", "json"]) == 0
-        rows = json.loads(capsys.readouterr().out)
-        df = fn()
-        assert df["id"].tolist() == [r["id"] for r in rows]
-        assert df["options"].str.len().ge(0).all()
-    methods = gnibench.methods().set_index("id")
-    assert methods.loc["scipy-dop853", "external"] and methods.loc["rk4", "order"] == 4
+LISTINGS = {"problems": (lambda: gnibench.list_problems(), PROBLEM_COLUMNS),
+            "methods": (lambda: gnibench.list_methods(), METHOD_COLUMNS),
+            "metrics": (lambda: gnibench.list_metrics(), METRIC_COLUMNS)}
 
 
-def test_registry_subpackages_stay_packages():
+@pytest.mark.parametrize("what", list(LISTINGS))
+def test_listings_are_gnibench_list(capsys, what):
+    fn, columns = LISTINGS[what]
+    assert main(["list", what, "--format", "json"]) == 0
+    rows = json.loads(capsys.readouterr().out)
+    df = fn()
+    assert df["id"].tolist() == [r["id"] for r in rows]
+    assert tuple(df.columns) == columns            # the documented columns, in order
+    assert df["options"].str.len().ge(0).all()
+
+
+def test_listing_columns_are_documented():
+    """Each column of a listing is named in its function's docstring (the user's script that hit
+    KeyError: 'kind' on the problems' listing followed a table that named a column it lacks)."""
+    from gnibench.suite.api import listing
+
+    for fn, columns in ((listing.list_problems, PROBLEM_COLUMNS),
+                        (listing.list_methods, METHOD_COLUMNS),
+                        (listing.list_metrics, METRIC_COLUMNS)):
+        doc = fn.__doc__.split("Returns")[1].split("Examples")[0]
+        documented = re.findall(r"``([a-z_]+)``", doc)
+        assert [c for c in documented if c in columns] == [c for c in columns if c in documented]
+        assert set(columns) <= set(documented), set(columns) - set(documented)
+
+
+def test_listing_values():
+    methods = gnibench.list_methods().set_index("id")
+    assert methods.loc["scipy-dop853", "kind"] == "external"
+    assert methods.loc["scipy-dop853", "engine"] == "scipy"
+    assert methods.loc["rk4", "order"] == 4 and methods.loc["rk4", "kind"] == "compiled"
+    assert bool(methods.loc["dopri5", "adaptive"]) and not bool(methods.loc["rk4", "adaptive"])
+    assert methods.loc["observer", "kind"] == "modifier" and pd.isna(methods.loc["observer", "order"])
+    assert methods.loc["projection", "acts_on"] == "step"
+    assert "kind" not in gnibench.list_problems().columns         # problems have no kind
+    problems = gnibench.list_problems().set_index("id")
+    assert problems.loc["kepler-2d", "integrals"] == ["H", "L", "A1", "A2"]
+    assert bool(problems.loc["kepler-2d", "exact_solution"])
+
+
+def test_registry_subpackages_are_only_packages():
+    """``gnibench.methods`` and ``gnibench.problems`` are the registries' subpackages, no longer
+    callable (Python gives no hint when a module is called); ``gnibench.metrics``, which was
+    a function, says where it went."""
     import gnibench.methods.external as ext
     from gnibench.methods import METHODS
 
     assert ext.ExternalMethod and "rk4" in METHODS
-    assert callable(gnibench.methods) and callable(gnibench.problems)
-    assert "kepler-2d" in gnibench.problems()["id"].tolist()
+    assert type(gnibench.methods) is type(sys) and type(gnibench.problems) is type(sys)
+    with pytest.raises(TypeError, match="not callable"):
+        gnibench.methods()
+    with pytest.raises(AttributeError, match=r"gnibench.list_metrics\(\)"):
+        gnibench.metrics()                                  # noqa: B018
+    assert "kepler-2d" in gnibench.list_problems()["id"].tolist()
 
 
 def test_import_is_cheap():
@@ -217,11 +257,11 @@ def test_load_user_definitions():
 def _load_and_solve(defs):
     ids = gnibench.load(defs)
     assert {"oscillator", "heun3", "py-rk4"} <= set(ids)
-    listed = gnibench.methods().set_index("id")
+    listed = gnibench.list_methods().set_index("id")
     assert listed.loc["py-rk4", "kind"] == "python" and listed.loc["heun3", "kind"] == "compiled"
     # an order that is not declared is missing (as `gnibench list` says), not order 0
     assert listed.loc["py-rk4", "order"] == 4 and pd.isna(listed.loc["py-dop853", "order"])
-    assert "oscillator" in gnibench.problems()["id"].tolist()
+    assert "oscillator" in gnibench.list_problems()["id"].tolist()
     api = gnibench.solve("oscillator:omega=2", "py-rk4:h=0.05", steps=40, every=10)
     cli = _cli_json_load(defs, ["oscillator:omega=2", "py-rk4:h=0.05", "--steps", "40",
                                 "--every", "10"])

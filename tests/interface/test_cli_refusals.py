@@ -193,23 +193,23 @@ def test_a_bad_gnibench_load_entry_is_one_line_before_work(entry, command, capsy
 def test_cells_that_ended_in_error_are_computed_again(tmp_path, capsys, monkeypatch):
     """An unexpected failure is not a result of a cell's inputs: the next run computes the cell
     again (the tables then hold the new part, not the one in error read at the start)."""
-    from gnibench.suite.cell import solve
+    from gnibench.suite.cell import driver
 
     exp = tmp_path / "tiny.toml"
     exp.write_text(TINY)
     out = tmp_path / "out"
-    real = solve.solve_cell
+    real = driver.integrate
 
     def broken(spec, **k):
         if spec.problem.record.id == "pendulum":
             raise MemoryError("out of memory")
         return real(spec, **k)
 
-    monkeypatch.setattr(solve, "solve_cell", broken)
+    monkeypatch.setattr(driver, "integrate", broken)
     assert main(["run", str(exp), "-o", str(out), "-j", "1", "--no-report"]) == 0
     cells = pd.read_parquet(out / "cells.parquet")
     assert sorted(cells["status"]) == ["error", "error", "ok", "ok"]
-    monkeypatch.setattr(solve, "solve_cell", real)
+    monkeypatch.setattr(driver, "integrate", real)
     capsys.readouterr()
     assert main(["run", str(exp), "-o", str(out), "-j", "1", "--no-report"]) == 0
     err = capsys.readouterr().err

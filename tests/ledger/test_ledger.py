@@ -123,7 +123,7 @@ def test_energy_recurrence_matches_euler_runs():
         f = sample_frame(t, out)
         f.insert(0, "cell", i)
         frames.append(f)
-        rows.append({"cell": i, "problem": t.problem, "method": t.method})
+        rows.append({"cell": i, "problem": t.problem, "problem_id": p, "method": t.method})
     got = closed_forms.euler_oscillator_energy(pd.DataFrame(rows), pd.concat(frames))
     assert got["deviation"] <= 1e-12
     # a wrong step size in the recurrence is caught

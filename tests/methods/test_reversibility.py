@@ -36,7 +36,7 @@ import numpy as np
 import pytest
 from gnibench import methods
 from gnibench.problems import REGISTRY
-from gnibench.suite.cell.driver import integrate
+from gnibench.suite.cell.solve import solve
 from gnibench.suite.cell.spec import prepare
 from support import cap, rate_scale, takes
 
@@ -76,7 +76,7 @@ def forth_and_back(pid: str, mid: str, steps: int = STEPS) -> tuple[float, float
     problem, cfg = prepare(pid, f"{mid}:h={h!r}")
 
     def run(bound, reverse):
-        traj = integrate(bound, cfg, steps=steps, every=steps, reverse=reverse)
+        traj = solve(bound, cfg, steps=steps, every=steps, reverse=reverse, reference="none")
         assert traj.status == "ok" and traj.steps[-1] == steps, (pid, mid, reverse, traj.status)
         return traj.y[-1].copy()
 

@@ -147,7 +147,6 @@ def test_work_precision_report_shows_the_solvers(tmp_path):
     import re
 
     import pandas as pd
-    from gnibench.reports.families import add_families
     from gnibench.reports.palette import styles
     from gnibench.reports.site import build_site
     from gnibench.suite.runs.runner import run_experiment
@@ -161,12 +160,11 @@ def test_work_precision_report_shows_the_solvers(tmp_path):
                     'methods = ["scipy-dop853:dt_out=3.14,atol=1e-14"]\nevery = 1\n'
                     'vary.rtol = [1e-6, 1e-9]\n')
     out = run_experiment(path, tmp_path / "out", jobs=1, log=open("/dev/null", "w"))  # noqa: SIM115
-    cells = add_families(pd.read_parquet(out / "cells.parquet"))
+    cells = pd.read_parquet(out / "cells.parquet")
     ours = cells[cells["family"] == "scipy-dop853"]
     assert len(ours) == 2 and ours["adaptive"].all() and (ours["method_kind"] == "external").all()
     assert (ours["sweep"] == "rtol").all() and ours["nfev"].notna().all()
-    style = styles(list(cells["family"].unique()), dict(zip(cells["family"], cells["adaptive"])),
-                   dict(zip(cells["family"], cells["method_kind"])))
+    style = styles(cells)
     assert style["scipy-dop853"]["marker"] == "^" and style["dop853"]["marker"] == "o"
     build_site([out], tmp_path / "site", thresholds=(1e-6,))
     html = (tmp_path / "site" / "wp-tiny-scipy.html").read_text()

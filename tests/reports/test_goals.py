@@ -5,8 +5,8 @@ import math
 from types import SimpleNamespace
 
 import pandas as pd
-from gnibench.reports.families import add_families
 from gnibench.reports.goals import family_table, goal_rows, goal_table, median_walls, picks
+from support_reports import with_method_columns
 
 P = "kepler-2d:e=0.6"
 CELLS = [  # method, status, final error, nfev
@@ -28,7 +28,7 @@ def _runs():
                           "method": [c[0] for c in CELLS], "status": [c[1] for c in CELLS],
                           "final_global_error": [c[2] for c in CELLS],
                           "nfev": [c[3] for c in CELLS]})
-    cells = add_families(cells)
+    cells = with_method_columns(cells)
     runs = [SimpleNamespace(timings=pd.DataFrame(
         {"cell": cells["cell"], "problem": P, "method": cells["method"], "status": cells["status"],
          "wall_seconds": [w / 1000 for w in ws]})) for ws in WALLS]

@@ -9,7 +9,6 @@ import re
 import numpy as np
 import pandas as pd
 import pytest
-from gnibench.reports.families import family_of
 from gnibench.reports.league import cost_to_reach, league
 from gnibench.reports.pages import split_description
 from gnibench.reports.results import load_manifest
@@ -92,16 +91,6 @@ def test_description_split():
     paragraphs, notes = split_description("a\nb\n\nc\n(choice) one\ncontinued\n(reading) two\n\nd")
     assert paragraphs == ["a b", "c", "d"]
     assert notes == [{"kind": "choice", "text": "one continued"}, {"kind": "reading", "text": "two"}]
-
-
-def test_families():
-    assert family_of("dopri5:adaptive=true,rtol=1e-08,atol=1e-08").label == "dopri5"
-    f = family_of("merson:adaptive=true,rtol=1e-05,atol=1e-06")
-    assert (f.label, f.sweep, f.value, f.adaptive) == ("merson:adaptive=true", "rtol", 1e-5, True)
-    assert family_of("heyoka-taylor:dt_out=0.01,tol=1e-10,precision=long double").label == \
-        "heyoka-taylor:precision=long double"
-    f = family_of("rk4:h=0.1+observer:mode=simple,on=H/L,theta=1/1")
-    assert (f.label, f.sweep, f.value) == ("rk4+observer:mode=simple,on=H/L,theta=1/1", "h", 0.1)
 
 
 def test_cost_to_reach():
@@ -252,12 +241,16 @@ def test_index_card_names_problems_briefly():
 
     long = "kepler-3d:mu=39.47841760435743,a=1,e=0.8,i=0.7853981633974483"
     assert len(long) > BRIEF
-    assert short_problems(["kepler-2d:e=0.6", "kepler-2d:e=0.6", long]) == ["kepler-2d:e=0.6",
-                                                                            "kepler-3d"]
-    assert short_problems(["lotka-volterra:u0=2,v0=2", "lotka-volterra:u0=4,v0=8",
-                           "pendulum"]) == ["lotka-volterra (2 parameter sets)", "pendulum"]
+    def cells(problems):
+        return pd.DataFrame({"problem": problems,
+                             "problem_id": [p.partition(":")[0] for p in problems]})
+
+    assert short_problems(cells(["kepler-2d:e=0.6", "kepler-2d:e=0.6", long])) == [
+        "kepler-2d:e=0.6", "kepler-3d"]
+    assert short_problems(cells(["lotka-volterra:u0=2,v0=2", "lotka-volterra:u0=4,v0=8",
+                                 "pendulum"])) == ["lotka-volterra (2 parameter sets)", "pendulum"]
     label = "a-problem-with-a-long-id-and-many-starts (12 initial values)"
-    assert brief(label) == label[:BRIEF - 1] + "…"
+    assert brief(label, None) == label[:BRIEF - 1] + "…"
 
 
 def test_legend_names_a_curve_by_its_method_else_by_its_own_group_label():
@@ -317,7 +310,7 @@ def test_the_chart_colour_bar_shows_the_problems_charts_only():
     from gnibench.reports.render import _panel
 
     cells = pd.DataFrame({"cell": [0], "problem": ["euler-so4"], "method": ["rk4:h=0.01"],
-                          "label": ["rk4"], "family": ["rk4"]})
+                          "label": ["rk4"], "family": ["rk4"], "problem_id": ["euler-so4"]})
     charts = np.array([1, 2, 2, 6], dtype=float)
     points = pd.DataFrame({"cell": 0, "x5": [0.1, 0.2, 0.3, 0.4], "x6": [0.0, 0.1, 0.2, 0.3],
                            "chart": charts})

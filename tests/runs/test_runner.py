@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import math
 
-import gnibench.suite.cell.solve
+import gnibench.suite.cell.driver
 import pandas as pd
 import pytest
 from gnibench.reports.markdown import summary_from_dir
@@ -41,15 +41,15 @@ def tiny(tmp_path):
 @pytest.fixture
 def failing_cell(monkeypatch):
     """Make the cell with h = 0.025 raise, as an unexpected bug would."""
-    real = gnibench.suite.cell.solve.solve_cell
+    real = gnibench.suite.cell.driver.integrate
 
-    def solve_cell(cell, **kw):
+    def integrate(cell, **kw):
         method = cell.method_text
         if "h=0.025" in method:
             raise RuntimeError("boom")
         return real(cell, **kw)
 
-    monkeypatch.setattr(gnibench.suite.cell.solve, "solve_cell", solve_cell)
+    monkeypatch.setattr(gnibench.suite.cell.driver, "integrate", integrate)
 
 
 @pytest.mark.parametrize("name", sorted(shipped()))
@@ -120,15 +120,15 @@ def test_two_runs_are_bit_identical(tiny, tmp_path):
 
 
 def test_interrupt_keeps_finished_cells(tiny, tmp_path, monkeypatch):
-    real = gnibench.suite.cell.solve.solve_cell
+    real = gnibench.suite.cell.driver.integrate
 
-    def solve_cell(cell, **kw):
+    def integrate(cell, **kw):
         method = cell.method_text
         if "h=1e+200" in method or "h=1e200" in method:
             raise KeyboardInterrupt
         return real(cell, **kw)
 
-    monkeypatch.setattr(gnibench.suite.cell.solve, "solve_cell", solve_cell)
+    monkeypatch.setattr(gnibench.suite.cell.driver, "integrate", integrate)
     out = tmp_path / "out"
     assert main(["run", str(tiny), "-o", str(out), "-j", "1"]) == 130
     cells = pd.read_parquet(out / "cells.parquet")

@@ -366,7 +366,7 @@ def test_declared_properties_are_checked(tmp_path, body, flags, refused):
     path.write_text(f'[[method]]\nid = "flagged"\n{flags}{body}')
     if refused is None:
         gnibench.load(path)
-        row = gnibench.methods().set_index("id").loc["flagged"]
+        row = gnibench.list_methods().set_index("id").loc["flagged"]
         for flag in ("symplectic", "symmetric"):
             assert bool(row[flag]) == (flag in flags), flag
         return

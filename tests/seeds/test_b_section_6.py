@@ -1,22 +1,19 @@
 """[B] §6, the Gavrilov–Shil'nikov system: Figs 15-25 reproduced at the quick scale (files, labels,
-data) and the verdicts of the §6 claims at the quick scale (suite/claims/b-6.toml)."""
+data) and the verdicts of the §6 claims at the quick scale (derived from the ledger:
+tests/support_figures.py, claims_of)."""
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
+from pathlib import Path
 
 import pandas as pd
 import pytest
-from support_figures import SECTION_FIGURES, check_figure, reused_cells
+from support_figures import SECTION_FIGURES, check_figure, check_verdicts, claims_of, paper_only, reused_cells
 
-FIGURES = SECTION_FIGURES["test_b_section_6"]
-#: claims and their outcomes at the quick scale (paper-only claims: skipped; the observer runs
-#: that stop near the equilibrium: not measured)
-QUICK = {"B-6.1-f": "partly", "B-6.2-a": "reproduced", "B-6.2-b": "skipped",
-         "B-6.2-c": "skipped", "B-6.2-d": "partly", "B-6.2-e": "reproduced",
-         "B-6.2-f": "not reproduced", "B-6.2-g": "reproduced", "B-6.2-h": "not measured",
-         "B-6.2-i": "not measured", "B-6.2-j": "reproduced", "B-6.2-k": "skipped",
-         "B-6.2-o": "not measured", "B-6.2-p": "skipped", "B-6.2-q": "reproduced"}
+FIGURES = SECTION_FIGURES[Path(__file__).stem]
+CLAIMS = claims_of(Path(__file__).stem)
 
 
 def _gnibench(*args):
@@ -60,10 +57,15 @@ def test_sections_are_on_the_plane(reproduced):
 
 
 def test_claims_quick_verdicts(reproduced):
-    r = _gnibench("verify", *QUICK, "--scale", "quick", "-o", str(reproduced), "-j", "1",
-                  "--no-report")
+    """Every §6 claim has its expected outcome at the quick scale (the paper-only ones skipped;
+    the observer runs that stop near the equilibrium: not measured, as expected)."""
+    r = _gnibench("verify", *CLAIMS, "--scale", "quick", "-o", str(reproduced), "-j", "1",
+                  "--no-report", "--format", "json")
     assert r.returncode == 0, r.stderr
     assert reused_cells(r.stderr) > 0               # the figures' cells, from the same store
+    rows = {row["id"]: row for row in json.loads(r.stdout)}
+    check_verdicts(rows, CLAIMS)
+    assert paper_only(CLAIMS) == {"B-6.2-b", "B-6.2-c", "B-6.2-k", "B-6.2-p"}
     ledger = pd.read_parquet(reproduced / "ledger.parquet").set_index("id")
-    got = {i: ledger.loc[i, "outcome"] for i in QUICK}
-    assert got == QUICK
+    assert [ledger.loc[i, "outcome"] for i in ("B-6.2-h", "B-6.2-i", "B-6.2-o")] == \
+        ["not measured"] * 3

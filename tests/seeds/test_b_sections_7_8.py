@@ -4,6 +4,7 @@ verdicts; the curve option ``where`` of the figure schema."""
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -13,15 +14,13 @@ from gnibench.suite.cli.main import main
 from gnibench.suite.foundation.errors import UserError
 from gnibench.suite.ledger.closed_forms_b7 import so4_growth, so4_overlap, so4_plateau
 from gnibench.suite.ledger.entries import load_ledger, missing_parts
-from support_figures import SECTION_FIGURES, check_figure, reused_cells
+from support_figures import SECTION_FIGURES, check_figure, check_verdicts, claims_of, paper_only, reused_cells
 
 AXES = {"b-fig-26": ("x₅", "x₆"), "b-fig-27": ("t", "|H3 − H3(x₀)|"),
            "b-fig-28": ("t", "|H1 − H1(x₀)|"), "b-fig-29": ("t", "|H2 − H2(x₀)|"),
            "b-fig-30": ("t", "|Hi − Hi(x₀)|"), "b-fig-31": ("q₁", "q₂"), "b-fig-32": ("t", "|H − H0|")}
-FIGURES = SECTION_FIGURES["test_b_sections_7_8"]
-CLAIMS = ["B-7.2-a", "B-7.2-b", "B-7.2-c", "B-7.2-d", "B-7.2-e", "B-7.2-f", "B-7.2-g", "B-7.2-h",
-          "B-8.2-a", "B-X-a", "B-X-b"]
-#: parts of B-X-* in sections other helpers write (CLAIMS.md ids); empty once merged
+FIGURES = SECTION_FIGURES[Path(__file__).stem]
+CLAIMS = claims_of(Path(__file__).stem)
 
 
 @pytest.fixture(scope="session")    # once per worker (pyproject: --dist loadscope, one worker)
@@ -87,11 +86,8 @@ def test_claims_have_their_expected_verdicts_at_quick_scale(figures, capsys):
     captured = capsys.readouterr()
     assert reused_cells(captured.err) > 0           # the figures' cells, from the same store
     rows = {r["id"]: r for r in json.loads(captured.out)}
-    paper_only = {i for i in CLAIMS if load_ledger()[i].scale == "paper"}
-    assert paper_only == {"B-7.2-a", "B-7.2-b", "B-7.2-c", "B-8.2-a"}
-    for i in CLAIMS[:-2]:
-        want = "skipped" if i in paper_only else rows[i]["expected"]
-        assert rows[i]["outcome"] == want, (i, rows[i])
+    assert paper_only(CLAIMS) == {"B-7.2-a", "B-7.2-b", "B-7.2-c", "B-8.2-a"}
+    check_verdicts(rows, CLAIMS)
     assert rows["B-7.2-d"]["measured"] >= 10 and rows["B-7.2-h"]["measured"] < 1
     # a method swap: not checkable, our Casimir-exact splitting's errors shown as a side result
     assert rows["B-7.2-e"]["verdict"] == "not checkable" and "side result" in rows["B-7.2-e"]["measured"]

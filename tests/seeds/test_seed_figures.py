@@ -5,8 +5,10 @@ its section (tests/support_figures.py: ``SECTION_FIGURES``, ``check_figure``: th
 through the runner into a results store, the figure is drawn, and the manifest read back from
 matplotlib must show the axis labels, scales and titles declared in the experiment's ``[figure]``
 section, every declared curve with data, every panel with something drawn, and the PNG and SVG
-files); here every figure of the registry must have exactly one such file. Paper scale:
-``pytest -m slow``.
+files); here every figure of the registry must have exactly one such file, and every claim of
+the ledger exactly one file that verifies it at the quick scale (its claims are derived from the
+ledger: ``claims_of``; a claim stated at the paper scale only is verified there as skipped).
+Paper scale: ``pytest -m slow``.
 """
 from __future__ import annotations
 
@@ -16,10 +18,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from gnibench.suite.ledger.entries import load_ledger
 from gnibench.suite.runs.reproduce import figures, load_figures, run_figures
-from support_figures import SECTION_FIGURES, check_figure
+from support_figures import SECTION_FIGURES, check_figure, claim_file, claims_of
 
 IDS = list(figures())
+CLAIM_IDS = list(load_ledger())
 
 
 def _reproduce(fid: str, scale: str, out):
@@ -43,6 +47,35 @@ def test_section_files_list_only_shipped_figures():
     assert sorted(listed) == sorted(IDS)
     here = Path(__file__).parent
     assert all((here / f"{name}.py").is_file() for name in SECTION_FIGURES), SECTION_FIGURES.keys()
+
+
+@pytest.mark.parametrize("cid", CLAIM_IDS)
+def test_claim_is_verified_by_one_seed_file(cid):
+    """Each claim of the ledger has exactly one seed test file, where it is verified at the quick
+    scale (or found skipped there, when it is stated at the paper scale only): the file of its
+    figure, else of its experiment when that is a figure, else of its section."""
+    claim = load_ledger()[cid]
+    files = claim_file(claim)
+    assert len(files) == 1, f"{cid}: verified by {files or 'no file'} (tests/support_figures.py)"
+    assert cid in claims_of(files[0])
+    if claim.figure and claim.figure in IDS:           # a figure's claims go with the figure
+        assert claim.figure in SECTION_FIGURES[files[0]], (cid, claim.figure, files)
+
+
+def test_every_seed_file_verifies_the_claims_derived_for_it():
+    """The seed test files take their claims from the ledger (``CLAIMS = claims_of(...)``), none
+    typed by hand; together they verify every claim once."""
+    import importlib.util
+
+    here = Path(__file__).parent
+    verified = []
+    for name in SECTION_FIGURES:
+        spec = importlib.util.spec_from_file_location(f"_seed_file_{name}", here / f"{name}.py")
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        assert module.CLAIMS == claims_of(name), name
+        verified += module.CLAIMS
+    assert sorted(verified) == sorted(CLAIM_IDS)
 
 
 @pytest.mark.slow
