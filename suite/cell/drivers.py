@@ -49,7 +49,8 @@ def build_trajectory(problem: Bound, method, t, y, counters, status: Status, rea
     y0 = tuple(float(v) for v in rec.y0(problem.values))
     t = np.ascontiguousarray(t, dtype=np.float64)
     y = np.ascontiguousarray(y, dtype=np.float64).reshape(len(t), rec.dim)
-    c = np.asarray(counters, dtype=np.float64).reshape(len(t), -1)
+    c = np.asarray(counters, dtype=np.float64)
+    c = c.reshape(len(t), -1) if len(t) else np.zeros((0, 4))     # no sample: no counters
     steps = c[:, 0].astype(np.int64) if np.isfinite(c[:, 0]).all() else c[:, 0].copy()
     return Trajectory(
         problem=problem.text(), method=method.text(), state_names=rec.state, t=t, y=y,

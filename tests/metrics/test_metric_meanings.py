@@ -200,3 +200,35 @@ def test_two_samples_are_enough_for_a_precession_rate():
     assert not skipped
     assert out.scalars["precession_rate"] == pytest.approx(0.02 / t2[1], rel=1e-12)
     assert out.scalars["pericenter_shift"] == pytest.approx(0.02, rel=1e-12)
+
+
+def test_eta_scalars_differ_where_the_phase_is_not_monotone():
+    """[B] §5.2's η at whole periods n T: an orbit turned by φ(n) about c0, with φ rising and
+    falling back (so the final η is far below the maximum, and the envelope of the phase is flat
+    over the window [T_end/2, T_end] while it grows before: the window's growth exponent is not
+    the whole run's): each scalar against its definition."""
+    from gnibench.suite.metrics.growth import envelope, growth_exponent
+    from test_metric_eta import exact_at, period, rotation
+
+    spec = "kepler-3d"
+    T = period(spec)
+    n = np.arange(0, 81)
+    phi = 0.3 * np.sin(np.pi * n / 80) + np.where(n > 40, 5e-5 * (n - 40.0) ** 2, 0.0)
+    y = exact_at(spec, n * T)
+    c0 = np.cross(y[0, :3], y[0, 3:])
+    for k in n:
+        R = rotation(c0, phi[k])
+        y[k, :3], y[k, 3:] = R @ y[k, :3], R @ y[k, 3:]
+    out, _ = apply(synthetic_trajectory(spec, n * T, y), parse_metrics("eta:window=0.5/1"))
+    s = out.scalars
+    assert np.max(np.abs(out.columns["eta_phase"] - phi)) < 1e-10
+    assert s["eta_final"] == pytest.approx(abs(phi[-1]), abs=1e-10)
+    assert s["eta_max"] == pytest.approx(np.max(np.abs(phi[1:])), abs=1e-10)
+    assert s["eta_final"] < 0.5 * s["eta_max"]                          # they differ here
+    assert s["eta_phase_final"] == pytest.approx(phi[-1], abs=1e-10)
+    assert s["eta_phase_rate"] == pytest.approx(np.polyfit(n, phi, 1)[0], abs=1e-10)
+    t = n * T
+    late = growth_exponent(t, envelope(phi), 0.5 * t[-1], t[-1])
+    whole = growth_exponent(t, envelope(phi), t[1], t[-1])
+    assert abs(late - whole) > 0.1                                       # the window matters
+    assert s["eta_exponent"] == pytest.approx(late, abs=1e-6)
