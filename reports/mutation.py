@@ -98,7 +98,8 @@ def cosmic_ray_table(doc: dict) -> str:
         lines.append(f"| {pkg} | {s['mutants']} | {s.get('equivalent', 0)} | {s['sampled']} | "
                      f"{s['killed']} | "
                      f"{s['survived']} | {s['unsettled']} | {score} |")
-    for row in doc.get("survivors", []):
+    if doc.get("survivors"):
         lines.append("")
+    for row in doc.get("survivors", []):
         lines.append(f"* survived: `{row['file']}` line {row['line']}, {row['operator']}")
     return "\n".join(lines)

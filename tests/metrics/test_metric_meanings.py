@@ -232,3 +232,15 @@ def test_eta_scalars_differ_where_the_phase_is_not_monotone():
     whole = growth_exponent(t, envelope(phi), t[1], t[-1])
     assert abs(late - whole) > 0.1                                       # the window matters
     assert s["eta_exponent"] == pytest.approx(late, abs=1e-6)
+
+
+def test_a_diverged_run_has_no_precession_rate_and_no_error():
+    """Every state non-finite (a run that diverged at once): ω is NaN everywhere and the rate is
+    NaN, a value, not an exception."""
+    prob, t, y = kepler_samples("kepler-2d:e=0.6", periods=1, per_period=8)
+    bad = np.full_like(y, np.nan)
+    bad[0] = y[0]
+    traj = synthetic_trajectory("kepler-2d:e=0.6", t, bad, y0=y[0])
+    traj.integrals[0] = np.nan                       # not even the first sample is usable
+    out, _ = apply(traj, parse_metrics("precession"))
+    assert math.isnan(out.scalars["precession_rate"])

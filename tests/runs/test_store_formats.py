@@ -1,4 +1,4 @@
-"""A stored part is reused only when it was written in the store's own format, older or newer
+"""The store across runs: a part is reused only when it was written in the store's own format
 (suite/runs/store.py, PART_FORMAT): a part of any other format is discarded with one warning and
 recomputed (a cosmic-ray survivor, issue 41: ``!=`` read as ``>``)."""
 from __future__ import annotations
@@ -22,3 +22,25 @@ def test_a_part_of_another_format_is_not_reused(tmp_path, monkeypatch, capsys, s
         assert "cannot be read" in capsys.readouterr().err
     finally:
         st.close()
+
+
+def test_run_experiments_reuses_stored_cells_unless_asked_fresh(tmp_path):
+    """``gnibench verify`` and ``reproduce`` share one store: by default a second run over the same
+    directory reuses every stored cell (run_experiments' default fresh=False)."""
+    import io
+
+    from gnibench.suite.runs.experiment import parse_experiment
+    from gnibench.suite.runs.runner import run_experiments
+
+    text = ('name = "r"\ntitle = "t"\nreference = "[HLW] I.1"\nsteps = 20\n'
+            '[[cells]]\nproblems = ["pendulum"]\nmethods = ["euler:h=0.1", "rk4:h=0.1"]\n')
+    logs = []
+    for fresh in (None, None, True):
+        log = io.StringIO()
+        kw = {} if fresh is None else {"fresh": fresh}
+        run_experiments([parse_experiment(text, "r.toml")], [tmp_path / "r"], tmp_path, jobs=1,
+                        log=log, **kw)
+        logs.append(log.getvalue())
+    assert "0 reused from the store, 2 to compute" in logs[0]
+    assert "2 reused from the store, 0 to compute" in logs[1]
+    assert "0 reused from the store, 2 to compute" in logs[2]
