@@ -4,7 +4,8 @@ Each external contestant is compared with a direct call of its library, written 
 that library would write it, with options that cannot be confused: rtol and atol unequal (and
 each other's swap checked to give other bits, so the comparison can tell them apart), heyoka's
 tolerance and precision, IAS15's epsilon. Same samples, bit for bit, and the options recorded in
-the result's provenance as given.
+the result's provenance as given. And heyoka's step counts at the samples (a cosmic-ray
+survivor's class, issue 41).
 """
 from __future__ import annotations
 
@@ -97,3 +98,12 @@ def test_ias15_contestant_passes_its_epsilon():
     assert np.array_equal(traj.y, ias15_directly(traj.t, eps))
     assert traj.provenance["engine"]["epsilon"] == eps
     assert not np.array_equal(ias15_directly(traj.t, 1e-3), traj.y)
+
+
+def test_heyoka_step_counts_count_the_steps_before_each_sample():
+    """``steps`` at a sample is the number of Taylor steps taken to reach it: 0 at t = 0, at least
+    1 at every later sample (several samples inside the first step all say 1), non-decreasing."""
+    traj = solve("kepler-2d", "heyoka-taylor:dt_out=0.01", t_end=1.0)
+    steps = np.asarray(traj.steps)
+    assert steps[0] == 0 and np.all(steps[1:] >= 1) and np.all(np.diff(steps) >= 0)
+    assert np.sum(steps == 1) > 1                      # samples inside the first step
