@@ -1,6 +1,7 @@
-"""The store across runs: a part is reused only when it was written in the store's own format
-(suite/runs/store.py, PART_FORMAT): a part of any other format is discarded with one warning and
-recomputed (a cosmic-ray survivor, issue 41: ``!=`` read as ``>``)."""
+"""The store across runs (suite/runs/store.py): a part is reused only when it was written in the
+store's own format (PART_FORMAT): a part of any other format, older or newer, is discarded with
+one warning and recomputed (a cosmic-ray survivor, issue 41: ``!=`` read as ``>``); and a second
+run reuses every stored cell unless asked to run fresh (another survivor: the default of fresh)."""
 from __future__ import annotations
 
 import pandas as pd
