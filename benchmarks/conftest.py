@@ -2,7 +2,7 @@
 pytest-benchmark's storage, ``.benchmarks/<machine>/NNNN_<commit>.json`` (git-ignored), as if
 ``--benchmark-autosave`` were given; ``gnibench report --benchmarks .benchmarks`` draws the history
 and ``pytest benchmarks --benchmark-only --benchmark-compare --benchmark-compare-fail=median:30%``
-fails on a slowdown (README, "Timing regressions")."""
+fails on a slowdown (documentation: how-to, "Track timing regressions")."""
 from __future__ import annotations
 
 import pytest

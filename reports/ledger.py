@@ -25,7 +25,7 @@ VERDICTS_TEXT = (
     "not get: *not measured*, with where the run stopped), *not checkable* (not a computation, or "
     "a method of another work in whose place we run ours; with the reason), *skipped* (paper "
     "scale only), *error* (the measurement itself failed). The threshold is the seed's own number "
-    "(*seed*), proposed in CLAIMS.md (*proposed*), or a closed form derived from the method's map. "
+    "(*seed*), proposed in the claims inventory (*proposed*), or a closed form derived from the method's map. "
     "The expected verdicts are a regression record of our own earlier outcome, not evidence: "
     "agreeing with them says nothing about the seeds.")
 

@@ -2,8 +2,8 @@
 
 One row per method, one column per error (an integral, or ``global``). Each entry shows the seed's
 text (``O(th)``) and what the tables give: the growth exponent in t (``growth_exponent_<X>``, the
-median over the row's cells: CLAIMS.md "growth exponent in t") and the exponent in h
-(``order_<X>``, fitted across the row's cells, which differ only in h: CLAIMS.md "exponent in h"),
+median over the row's cells: the claims inventory "growth exponent in t") and the exponent in h
+(``order_<X>``, fitted across the row's cells, which differ only in h: the claims inventory "exponent in h"),
 as ``t^a h^b``. When every cell's max |err| is below the figure's ``zero_below``, the entry reads
 ``0`` with that maximum (round-off: [HLW] Table 2.1's exact conservation of L).
 """

@@ -1,6 +1,6 @@
 """Spec strings: one syntax on the CLI, in experiment files and in tables.
 
-Grammar (public contract, see README)::
+Grammar (public contract, docs: reference, "Spec strings")::
 
     PROBLEM  := id[:key=value,...]
     METHOD   := base[:key=value,...] { +modifier[:key=value,...] }

@@ -1,26 +1,25 @@
-"""The README tables of the input files' keys, rendered from the schema records.
+"""The key tables of the input files (experiments, figures, claims), rendered from the schema
+records.
 
-The tables of ``suite/experiments/README.md`` (experiment, groups, point sets, scales, figure) and
-of ``README.md`` (claims) sit between ``<!-- schema: NAME -->`` and ``<!-- /schema -->`` markers
-and are generated from the records (:mod:`gnibench.suite.runs.experiment_schema`,
-:mod:`gnibench.suite.runs.figure_schema`, :class:`gnibench.suite.ledger.entries.Claim`);
-``tests/runs/test_schema_docs.py`` fails when they differ. Regenerate them after changing a record::
+The documentation's reference page "Experiment files" (``docs/reference/input-files.md``) shows
+them through its ``gnibench-schema`` directive, which calls :func:`render` when the documentation
+builds, so the tables are never copied by hand and cannot disagree with the records
+(:mod:`gnibench.suite.runs.experiment_schema`, :mod:`gnibench.suite.runs.figure_schema`,
+:class:`gnibench.suite.ledger.entries.Claim`). ``tests/runs/test_schema_docs.py`` checks that the
+page shows every table and that every key of every record is in its table. Print them::
 
-    python -m gnibench.suite.cli.schema_docs            # rewrite the tables in place
-    python -m gnibench.suite.cli.schema_docs --check    # exit 1 when a table is stale
+    python -m gnibench.suite.cli.schema_docs            # every table, as Markdown
+    python -m gnibench.suite.cli.schema_docs claim      # one
 """
 from __future__ import annotations
 
-import re
 import sys
-from pathlib import Path
 
 from gnibench.suite.foundation.records import markdown_table
 from gnibench.suite.ledger.entries import Claim, Value
 from gnibench.suite.runs import experiment_schema as ex
 from gnibench.suite.runs import figure_schema as fig
 
-ROOT = Path(__file__).resolve().parents[2]
 #: table name -> [(heading, record, key prefix)]
 TABLES = {
     "experiment": [("Top level", ex.ExperimentFile, "")],
@@ -39,11 +38,6 @@ TABLES = {
                ("`[[figure.table.rows]]`", fig.Row, "")],
     "claim": [("`[[claim]]`", Claim, ""), ("`values.<name> = {...}`", Value, "")],
 }
-FILES = {"suite/experiments/README.md": ("experiment", "group", "points", "scales", "figure"),
-         "README.md": ("claim",)}
-_BLOCK = re.compile(r"(<!-- schema: (\w+) -->\n)(.*?)(<!-- /schema -->)", re.DOTALL)
-
-
 def render(name: str) -> str:
     """The Markdown of one schema table (its records' keys, one table each)."""
     parts = []
@@ -52,33 +46,15 @@ def render(name: str) -> str:
     return "\n".join(parts)
 
 
-def refreshed(text: str) -> str:
-    """``text`` with every marked table replaced by its rendering."""
-    return _BLOCK.sub(lambda m: m.group(1) + render(m.group(2)) + m.group(4), text)
-
-
-def stale(root: Path = ROOT) -> list[str]:
-    """The files whose tables differ from the records (or that lack a table)."""
-    out = []
-    for path, names in FILES.items():
-        text = (root / path).read_text(encoding="utf-8")
-        found = {m.group(2) for m in _BLOCK.finditer(text)}
-        if set(names) - found or refreshed(text) != text:
-            out.append(path)
-    return out
-
-
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
-    if "--check" in argv:
-        files = stale()
-        for path in files:
-            print(f"{path}: schema tables differ from the records; run python -m "
-                  f"gnibench.suite.cli.schema_docs", file=sys.stderr)
-        return 1 if files else 0
-    for path in FILES:
-        file = ROOT / path
-        file.write_text(refreshed(file.read_text(encoding="utf-8")), encoding="utf-8")
+    names = argv or list(TABLES)
+    unknown = [n for n in names if n not in TABLES]
+    if unknown:
+        print(f"unknown table {unknown[0]!r}; allowed: {', '.join(TABLES)}", file=sys.stderr)
+        return 2
+    for name in names:
+        print(f"<!-- {name} -->\n{render(name)}")
     return 0
 
 

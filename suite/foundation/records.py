@@ -6,14 +6,14 @@ is not a number, a string is not a list; ``allow_inf_nan=False``), whose fields 
 bounds, sizes, default, an :class:`Allowed` text (what the error says is allowed) and a
 description. The schemas live in one place each (``suite/runs/experiment_schema.py``,
 ``suite/runs/figure_schema.py``, ``suite/ledger/entries.py``); a new key is one line there; the
-README's tables of keys are rendered from them (:func:`markdown_table`).
+documentation's tables of keys are rendered from them (:func:`markdown_table`).
 
 Why pydantic v2 rather than msgspec: pydantic's errors are structured (the location of the key as
 a tuple, the offending input, the violated bound), which is what one line naming the file, the
 path of the key and what is allowed needs; msgspec reports one formatted string. Field and model
 validators let the semantics that need the registries (spec strings, metric choices, cross-key
 rules) run inside the same validation with the same error path, and the field metadata
-(constraints, descriptions) is introspectable for the README tables. Speed is irrelevant here
+(constraints, descriptions) is introspectable for the documentation's tables. Speed is irrelevant here
 (files of a few kB, validated once).
 
 :func:`validate` turns a :class:`pydantic.ValidationError` into one :class:`UserError` line::
@@ -44,7 +44,7 @@ MAX_ITEMS = 10_000        # items of one list
 
 @dataclass(frozen=True)
 class Allowed:
-    """What a key allows, in words (the error message and the README table say it)."""
+    """What a key allows, in words (the error message and the documentation's table say it)."""
 
     text: str
 

@@ -165,7 +165,7 @@ def euler_observer_limit(cells, samples) -> dict:
 
 
 def euler_observer_improvement(cells, samples) -> dict:
-    """[B] §4.2, Fig 8(b), CLAIMS.md B-4.2-g: the observer on H1 only improves the non-observed
+    """[B] §4.2, Fig 8(b), claim B-4.2-g: the observer on H1 only improves the non-observed
     H2. The selected cells are plain Euler (``label=Euler h=1e-3``) and Euler + observer on H1;
     at every sample after the first (same steps in both): ``improved`` = 1 when |err_H2| of the
     observed run is below plain Euler's everywhere; ``ratio_final`` = their ratio at the end;

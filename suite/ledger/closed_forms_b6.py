@@ -6,7 +6,7 @@ Hamiltonian (6.3). The exact orbit from (0, 0, 0, √2) lies on H = K = 0, whose
 f(q2, p2) = q2² − p2² + p2⁴/2 = 0 (one lobe of the "figure 8" of Fig 15(a), the half q2 > 0 leading
 into the equilibrium, the half q2 < 0 leading out). The modified system after Fig 23 has the trace
 f = q2² − p2² + p2⁴/2 + B p2² q2² = 0 (its H at q1 = p1 = 0, times 2). The statistics below
-measure the claims of CLAIMS.md §6 (B-6.2-a … B-6.2-q) on the section samples of each cell:
+measure the claims of the claims inventory §6 (B-6.2-a … B-6.2-q) on the section samples of each cell:
 
 * ``points``; ``neg``/``pos``: points with q2 < 0 / q2 > 0 outside the disc ‖(q2, p2)‖ < 10⁻²;
 * ``traversals``: passages from near the equilibrium (‖·‖ < 10⁻²) to the far tip (p2 > 1) of the loop;
@@ -33,7 +33,7 @@ measure the claims of CLAIMS.md §6 (B-6.2-a … B-6.2-q) on the section samples
   a distance its level does not allow: the levels changed during the passage — the irregular
   behaviour [B] calls numerical chaos. ``irregular`` = share of the passages with ρ_k > s;
   regular: none (0); chaotic: the rule (≥ 1/2, a majority); partly irregular in between
-  (thresholds fixed by this argument, not by the runs; CLAIMS.md B-6.2-b proposed "irregular
+  (thresholds fixed by this argument, not by the runs; claim B-6.2-b proposed "irregular
   order" without a number). (The bound assumes the crossings of the section every T_c or more
   often, true while ω + I/r² ≥ ω, i.e. I ≥ 0 near the passage; we do not correct for I < 0.)
 * ``increases``: steps along the points after the last far point (p2 > 1) where ‖·‖ grows by more

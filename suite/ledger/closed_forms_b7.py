@@ -8,19 +8,19 @@ wants a trajectory, does not apply; the same statistics are computed here on the
 * ``so4_overlap`` ([B] Fig 26, "the resemblance between both figures is exceptionally good";
   §7.2, "the shape of the obtained chaotic region is independent of the chosen initial orbit"):
   the points of each selected cell in the chart Γ1, binned on a 200 × 200 grid of
-  (x5, x6) ∈ [−2, 2]² (CLAIMS.md B-7.2-b, proposed); the Jaccard overlap |A ∩ B| / |A ∪ B| of the
+  (x5, x6) ∈ [−2, 2]² (claim B-7.2-b, proposed); the Jaccard overlap |A ∩ B| / |A ∪ B| of the
   occupied bins, the smallest over all pairs of cells; and the points in Γ1 of each cell.
 * ``so4_plateau`` ([B] §7.2 after Fig 29, "oscillating around a stable non-zero value"): for each
   err_Hi, the least-squares line err = m + s t over [T/2, T], its drift |s|·T/2 relative to |mean|,
-  |mean| / std (CLAIMS.md B-7.2-f), and ``same_sign``, the share of the samples in [T/2, T] with the
+  |mean| / std (claim B-7.2-f), and ``same_sign``, the share of the samples in [T/2, T] with the
   sign of the mean: an error oscillating around zero has one sign half of the time, one that
   oscillates around a non-zero value more often; for a sinusoidal oscillation a + m, the share
   is ½ + arcsin(m/a)/π, so ``same_sign`` ≥ 3/4 ⇔ the offset m exceeds the oscillation's rms
-  a/√2 (CLAIMS.md's |mean| ≥ 2 std instead demands an error that never changes sign). The worst
+  a/√2 (the claims inventory's |mean| ≥ 2 std instead demands an error that never changes sign). The worst
   over i and the cells.
 * ``so4_growth`` ([B] §7.2, "the error ... increases for H1 and H2"): the growth exponent in t of
   the envelope max_{s≤t} |err_Hi(s)|, the least-squares slope of log envelope against log t over
-  [T/100, T] on 200 log-spaced times (CLAIMS.md Conventions); the smallest over H1, H2 and cells.
+  [T/100, T] on 200 log-spaced times (the claims inventory Conventions); the smallest over H1, H2 and cells.
 """
 from __future__ import annotations
 

@@ -242,7 +242,7 @@ def implicit_euler_solar_system(cells, samples) -> dict:
     Newton cell: whether it ended newton_failed and, at its last point, the ``margin`` of
     :func:`_implicit_euler_gap` (> 0: the step has no solution at all). For the fixed-point cells
     (each must run to the end): ``picture`` = share of them in which Jupiter comes within 0.5 AU
-    of the sun before Saturn does and both end ≥ 50 AU away (CLAIMS.md), with each cell's
+    of the sun before Saturn does and both end ≥ 50 AU away (the claims inventory), with each cell's
     ``jupiter_fall_<K>``, ``saturn_fall_<K>``, ``final_r_<K>``, ``unconverged_<K>`` (steps whose
     iteration did not converge, njev)."""
     from gnibench.suite.cell.spec import parse_method, parse_problem
@@ -280,7 +280,7 @@ def implicit_euler_solar_system(cells, samples) -> dict:
 
 def angular_momentum_roundoff(cells, samples) -> dict:
     """[HLW] I.2.3, HLW-2.1-b: the error of L = q1 p2 − q2 p1 against two round-off scales, over
-    the selected cells (the worst): ``ratio_L`` = max|L_n − L0| / (ε |L0| √n) (CLAIMS.md's
+    the selected cells (the worst): ``ratio_L`` = max|L_n − L0| / (ε |L0| √n) (the claims inventory's
     proposal) and ``ratio_qp`` = max|L_n − L0| / (ε max_n |q_n||p_n| √n): the products q1 p2 and
     q2 p1 are each rounded to ε |q||p|, which exceeds |L| by far near the pericentre at large h."""
     eps = float(np.finfo(float).eps)

@@ -20,7 +20,7 @@ distance ‖y* − y_ref‖₂ (the whole state) to an independent location of t
    compensated summation) integrates the problem's base field to its terminal event g = 0, which
    heyoka locates as a root of the Taylor polynomial of g within the step, to the working
    precision; y_ref is heyoka's state there. Over one step (≲ 1 time unit) its own error is
-   ≲ 1e-18, a thousand times below the thresholds of [B] §6.2 (CLAIMS.md B-6.2-q): a distance above
+   ≲ 1e-18, a thousand times below the thresholds of [B] §6.2 (claim B-6.2-q): a distance above
    them is the locator's. Hence only compiled cells of the base field (no +observer/+penalty, no
    identification map): ValueError otherwise.
 

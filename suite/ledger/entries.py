@@ -2,7 +2,7 @@
 
 An entry (``[[claim]]``)::
 
-    id         = "B-4.2-d"                       # as in CLAIMS.md
+    id         = "B-4.2-d"                       # as in the claims inventory
     kind       = "E"                             # E: needs a run; I: identity / structure
     citation   = "[B] §4.2, text before Fig 7"
     claim      = "Euler, h = 0.1: after 55 steps |err| > 1 for both integrals"   # our own words
@@ -53,11 +53,11 @@ ways); otherwise the entry says why in ``one_sided`` (a distance, >= 0 by constr
 inequality of the seed; "bounded"; "better" without a size): :mod:`gnibench.suite.ledger.sides`
 finds the one-sided comparisons, and the tests check that exactly those entries give a reason.
 Cell selectors: ``field=value`` / ``field~value`` terms joined by ``&``, alternatives by ``|``.
-Ids: those of CLAIMS.md, and ``<id>.corrected`` for the corrected relation of a seed's slip (the
+Ids: those of the claims inventory, and ``<id>.corrected`` for the corrected relation of a seed's slip (the
 printed statement keeps the inventory id).
 
 The keys, their types, defaults and what each allows are the fields of :class:`Claim` and
-:class:`Value` below (a new key is one line there; the README's table of claim keys is rendered
+:class:`Value` below (a new key is one line there; the documentation's table of claim keys is rendered
 from them); the rules between keys are :meth:`Claim._one_way`. Expressions are those of
 :mod:`gnibench.suite.foundation.expressions` (bounded, checked when the ledger is read).
 """
@@ -131,7 +131,7 @@ class Claim(Record):
     """One ledger entry (``[[claim]]``; see the module docstring)."""
 
     id: Annotated[str, Field(pattern=r"^(B|HLW)-[A-Za-z0-9.\-]+$", max_length=80)] = key(
-        doc="as in CLAIMS.md", allowed="B-... or HLW-... as in CLAIMS.md")
+        doc="as in the claims inventory", allowed="B-... or HLW-... as in the claims inventory")
     kind: Literal["E", "I"] = key(doc="E: needs a run; I: an identity or structure")
     citation: NonEmptyLine = key(doc="the place in the seed")
     claim: NonEmptyLine = key(doc="the claim in our own words")
@@ -227,7 +227,7 @@ def load_ledger() -> dict[str, Claim]:
 
 def missing_parts(ledger: dict[str, Claim]) -> dict[str, list[str]]:
     """Parts of aggregates that are not in the ledger, by aggregate id. An aggregate may name the
-    claims of a section whose entries are still being written (CLAIMS.md ids); verify judges the
+    claims of a section whose entries are still being written (the claims inventory ids); verify judges the
     missing parts "not checkable" and says so, and the tests list the ones still expected."""
     return {c.id: [p for p in c.all_of if p not in ledger]
             for c in ledger.values() if any(p not in ledger for p in c.all_of)}

@@ -14,7 +14,7 @@ from gnibench.suite.ledger.closed_forms_b41 import apsides
 SWEEP = ("kepler-radial", "kepler-radial:mu=2,p_phi=2", "kepler-radial:mu=4,p_phi=4",
          "kepler-radial:p_phi=1.09", "kepler-radial:p_phi=0.8")
 ORBITS = 10
-WITHIN = 0.05            # of a period (CLAIMS.md B-4.1-e, proposed)
+WITHIN = 0.05            # of a period (claim B-4.1-e, proposed)
 
 
 def _fractions(method: str, peaks_of: str) -> dict:

@@ -1,4 +1,4 @@
-"""Identity checks of [HLW] Ch. I: structure and closed-form statements (kind [I] of CLAIMS.md)."""
+"""Identity checks of [HLW] Ch. I: structure and closed-form statements (kind [I] of the claims inventory)."""
 from __future__ import annotations
 
 import math

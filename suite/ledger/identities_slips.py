@@ -2,7 +2,7 @@
 judge the printed statement, and the corrected relation in a second entry ``<id>.corrected``).
 
 * [B] after (6.1), B-6.1-a: the type of the equilibrium by the sign of ε, with ε on ½|q|² only
-  (CLAIMS.md Part 4, item 4); as printed (ε on all three terms) in :mod:`.identities_b`.
+  (the claims inventory Part 4, item 4); as printed (ε on all three terms) in :mod:`.identities_b`.
 * [B] after Fig 23, B-6.2-m: the modified G-S loop at I = 0, P² = r²(2 − r²)/(2(1 + B r²)), is
   closed iff 1 + B r² > 0 on [0, √2], i.e. B > −1/2 ([B] says B > −1; Part 4, item 5).
 * [B] §7.1, B-7.1-c: (7.5)-(7.7) on the section as printed, x3 = 0: the rebuilt points have
@@ -18,7 +18,7 @@ from gnibench.suite.ledger.identity_tools import problem
 
 
 def gs_equilibrium_types_corrected() -> dict:
-    """[B] after (6.1) with ε on ½|q|² only: H = ωK − ½|p|² + (ε/2)|q|² + ¼|p|⁴ (CLAIMS.md)."""
+    """[B] after (6.1) with ε on ½|q|² only: H = ωK − ½|p|² + (ε/2)|q|² + ¼|p|⁴ (the claims inventory)."""
     import sympy as sp
 
     q1, q2, p1, p2 = sp.symbols("q1 q2 p1 p2", real=True)

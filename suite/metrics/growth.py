@@ -3,7 +3,7 @@
 [HLW] Table 2.1 states how the errors of the Kepler problem grow with t: O(th) (explicit Euler's
 energy, a linear drift), O(h) (symplectic Euler's energy, bounded, "no secular terms" [HLW] I.2.3),
 O(t^2 h) (explicit Euler's global error). [B] §3 (end) and §7.2 (after Fig 29) describe an error
-"oscillating around a stable non-zero value". The claims inventory (CLAIMS.md, Conventions) makes
+"oscillating around a stable non-zero value". The claims inventory (the claims inventory, Conventions) makes
 these checkable:
 
 * envelope(t) = max_{s <= t} |err(s)|;
@@ -35,7 +35,7 @@ def envelope(err: np.ndarray) -> np.ndarray:
 
 def growth_exponent(t: np.ndarray, env: np.ndarray, t_lo: float, t_hi: float,
                     points: int = FIT_POINTS) -> float:
-    """Least-squares slope of log env against log t over [t_lo, t_hi] (CLAIMS.md, Conventions).
+    """Least-squares slope of log env against log t over [t_lo, t_hi] (the claims inventory, Conventions).
 
     The fit uses the samples nearest below ``points`` log-spaced times in the window (each sample
     once), so every decade weighs the same however the samples are spaced. Samples with t <= 0 or
@@ -75,7 +75,7 @@ def drift_and_oscillation(t: np.ndarray, err: np.ndarray, t_lo: float,
 
 def early_late_maxima(t: np.ndarray, err: np.ndarray) -> tuple[float, float, float]:
     """max |err| over [0, T/2] and over [T/2, T] (T = the last sample time), and their ratio
-    late/early (CLAIMS.md "bounded / no drift": ratio <= 1.5). NaN counts as infinite; the ratio
+    late/early (the claims inventory "bounded / no drift": ratio <= 1.5). NaN counts as infinite; the ratio
     is 1 when both maxima are 0 (an exactly conserved quantity does not drift)."""
     t, a = np.asarray(t, dtype=float), np.abs(np.asarray(err, dtype=float))
     if not len(t):
@@ -165,12 +165,12 @@ def check_window(values) -> str:
 
 growth = Metric(
     id="growth", title="growth of an error in time: envelope, exponent in t, drift, oscillation",
-    reference="[HLW] Table 2.1, I.2.3; [B] §3 (end), §7.2; CLAIMS.md Conventions",
+    reference="[HLW] Table 2.1, I.2.3; [B] §3 (end), §7.2; the claims inventory Conventions",
     doc=("for each chosen error X (an integral's err_<I>, or the global error): the envelope "
          "max_{s<=t}|err_X(s)|; its growth exponent in t (least-squares log-log slope over the "
          "window, log-spaced samples); the least-squares line err_X = m + s t over the window "
          "(drift s) and half the peak-to-peak of the residual (oscillation); max|err_X| over "
-         "[0, T/2] and [T/2, T] and their ratio (CLAIMS.md 'bounded / no drift': exponent <= 0.1 "
+         "[0, T/2] and [T/2, T] and their ratio (the claims inventory 'bounded / no drift': exponent <= 0.1 "
          "and ratio <= 1.5)"),
     compute=_compute, needs=("samples",),
     params=(Param("of", None, "the errors: integral names and/or global (default: every integral, "

@@ -15,7 +15,7 @@ O(t h^2)); the global error of a method of order p is O(t h^p) ([HLW] (1.5)-(1.7
 The trimming uses only the data, never a declared order.
 
 As a metric (``order``, a family metric), the error of each cell is taken from the samples
-table: its maximum over the samples (``at=max``, CLAIMS.md "exponent in h": slope of log max|err|
+table: its maximum over the samples (``at=max``, the claims inventory "exponent in h": slope of log max|err|
 against log h at fixed t) or its value at the last sample (``at=final``); a cell that did not end
 ``ok`` counts as infinite. The family is the cells equal in everything but h
 (:mod:`gnibench.suite.metrics.families`).
@@ -115,7 +115,7 @@ def _compute(cells: pd.DataFrame, samples: pd.DataFrame, values) -> pd.DataFrame
 
 order = Metric(
     id="order", title="exponent in h: observed order of an error across the cells of a family",
-    reference="[HLW] Table 2.1, (1.5)-(1.17); CLAIMS.md Conventions ('exponent in h')",
+    reference="[HLW] Table 2.1, (1.5)-(1.17); the claims inventory Conventions ('exponent in h')",
     doc=("for the cells of an experiment equal in everything but h: the least-squares slope of "
          "log(error) against log(h) after dropping round-off plateaus, non-decreasing tails and "
          "failed cells and trimming end points off the median local rate (GeometricIntegrators.jl "

@@ -22,7 +22,7 @@ Under K-S ([B] (5.4), ``kepler-3d:ks=true``) the integration runs in the fictiti
 which one revolution takes Δs = 2π √(a/μ) (1 for [B]'s orbit): a fixed step Δs/N with ``every =
 N`` samples each revolution, at a time t(s) that is nT only up to the integration error, so those
 samples count with a looser ``rtol`` (e.g. 1e-6; the gap "how η(nT) is sampled for K-S" of
-CLAIMS.md).
+the claims inventory).
 """
 from __future__ import annotations
 

@@ -4,12 +4,12 @@
 "goes only few times along the homoclinic loop, and after that it oscillates very close to the
 equilibrium point ... almost 90% points in Figure 18 lie in a very small neighbourhood". The
 fraction of section points within a radius δ of a point measures that (the radius is a gap of the
-seed; CLAIMS.md B-6.2-d proposes δ = 1e-3, the default here). [B] §7 (Figs 26-30) draws the so(4)
+seed; claim B-6.2-d proposes δ = 1e-3, the default here). [B] §7 (Figs 26-30) draws the so(4)
 section in its charts Γ1..Γ8; the points per chart say where an orbit's crossings went.
 
 Distances are Euclidean, in the section's recorded coordinates (``space=section``: what the
 figures plot, e.g. (q2, p2) for G-S, (x5, x6) for so(4)) or in the full state (``space=state``,
-the ‖x‖ < δ of CLAIMS.md). The default point is the origin of that space, which is the
+the ‖x‖ < δ of the claims inventory). The default point is the origin of that space, which is the
 equilibrium x = 0 of G-S [B] (6.1).
 """
 from __future__ import annotations
@@ -72,12 +72,12 @@ def _check(traj, problem, values) -> str:
 
 section_stats = Metric(
     id="section_stats", title="section points: counts per chart, fraction within a radius",
-    reference="[B] §6.2 (Fig 18), §7 (Figs 26-30); CLAIMS.md B-6.2-d",
+    reference="[B] §6.2 (Fig 18), §7 (Figs 26-30); claim B-6.2-d",
     doc=("number of section points, per chart (Γ1..Γk of multi-chart sections such as so(4)), "
          "their distance to a point (default: the origin, G-S's equilibrium) and the fraction "
          "within a radius"),
     compute=_compute, needs=("section",),
-    params=(Param("radius", 1e-3, "radius δ of the neighbourhood (CLAIMS.md B-6.2-d proposes "
+    params=(Param("radius", 1e-3, "radius δ of the neighbourhood (claim B-6.2-d proposes "
                   "1e-3)", low=0.0, low_open=True),
             Param("point", None, "centre of the neighbourhood, in the coordinates of the space "
                   "(default: the origin)", kind="floats"),

@@ -237,7 +237,7 @@ class ExperimentFile(Common):
     scale: TopScales | None = key(None, "[scale.quick]: the top level at another scale")
     figure: Figure | None = key(None, "a figure or table of a seed ([figure])")
     load: Annotated[list[NonEmptyLine], Field(max_length=64)] = key(
-        [], "user definitions loaded before the cells are read (README, User definitions)",
+        [], "user definitions loaded before the cells are read (docs: reference, User definitions)",
         "a list of paths of definitions files, relative to the experiment file")
 
     @model_validator(mode="after")

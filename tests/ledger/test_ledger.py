@@ -45,7 +45,7 @@ def test_the_ledger_covers_the_inventory_exactly():
     assert not missing and not extra, f"missing {missing}, not in the inventory {extra}"
     orphans = [i for i in corrected if i.removesuffix(".corrected") not in inventory]
     assert not orphans, f"corrected entries without their printed claim: {orphans}"
-    assert corrected, "the policy on slips: at least the slips of CLAIMS.md Part 4 are corrected"
+    assert corrected, "the policy on slips: at least the slips of the claims inventory Part 4 are corrected"
 
 
 @pytest.mark.parametrize("text,ok", [

@@ -111,7 +111,7 @@ def test_explicit_euler_energy_grows_linearly_on_the_oscillator():
 
 
 def test_symplectic_euler_energy_error_is_bounded_on_the_oscillator():
-    """[HLW] I.2.3: no secular terms for symplectic Euler; CLAIMS.md 'bounded / no drift'."""
+    """[HLW] I.2.3: no secular terms for symplectic Euler; the claims inventory 'bounded / no drift'."""
     traj = solve("harmonic-oscillator", "symplectic-euler:h=0.01", steps=20_000, every=10)
     out, _ = apply(traj, parse_metrics("growth:of=H"))
     s = out.scalars

@@ -13,7 +13,7 @@ independently of the metric's code (numpy on the samples, the problem's formulas
   for the Kepler problem: a division by H(y0) flips it), max_abs / max_rel their maxima;
 * precession ([HLW] I.2.3): the rate is the least-squares slope of ω, not the shift over the run
   divided by the time; the shift is ω(T) - ω(0); per period = rate x the period;
-* growth (CLAIMS.md Conventions): drift = least-squares slope over the window, mean, oscillation =
+* growth (the claims inventory's conventions): drift = least-squares slope over the window, mean, oscillation =
   half the peak-to-peak of the residual, max over [0, T/2] and [T/2, T] and their ratio.
 """
 from __future__ import annotations

@@ -1,24 +1,41 @@
-"""The README tables of the input files' keys are the ones rendered from the schema records."""
+"""The key tables of the input files are rendered from the schema records, and the
+documentation's reference page shows every one of them (docs/reference/input-files.md)."""
 from __future__ import annotations
 
+import re
+from pathlib import Path
+
+import pytest
 from gnibench.suite.cli import schema_docs
+from gnibench.suite.foundation.records import fields
 from gnibench.suite.runs.experiment_schema import Group
 
-
-def test_readme_tables_match_the_records():
-    assert schema_docs.stale() == [], (
-        "the schema tables of the READMEs differ from the records; regenerate them with "
-        "python -m gnibench.suite.cli.schema_docs")
+PAGE = Path(__file__).resolve().parents[2] / "docs" / "reference" / "input-files.md"
 
 
-def test_a_changed_record_makes_the_tables_stale(tmp_path, monkeypatch):
-    for path in schema_docs.FILES:
-        (tmp_path / path).parent.mkdir(parents=True, exist_ok=True)
-        (tmp_path / path).write_text((schema_docs.ROOT / path).read_text())
-    assert schema_docs.stale(tmp_path) == []
-    monkeypatch.setattr(Group.model_fields["label"], "description", "changed")
-    assert schema_docs.stale(tmp_path) == ["suite/experiments/README.md"]
-    monkeypatch.undo()
-    text = (tmp_path / "README.md").read_text()
-    (tmp_path / "README.md").write_text(text.replace("<!-- schema: claim -->", ""))
-    assert schema_docs.stale(tmp_path) == ["README.md"]
+def test_the_reference_page_shows_every_table():
+    shown = re.findall(r"^```\{gnibench-schema\} (\w+)\s*$", PAGE.read_text(encoding="utf-8"), re.M)
+    assert sorted(shown) == sorted(schema_docs.TABLES), (
+        f"{PAGE.name} shows the tables {shown}; the records have {sorted(schema_docs.TABLES)}")
+
+
+@pytest.mark.parametrize("name", sorted(schema_docs.TABLES))
+def test_every_key_of_every_record_is_in_its_table(name):
+    text = schema_docs.render(name)
+    for _, record, prefix in schema_docs.TABLES[name]:
+        for key in fields(record):
+            assert f"| `{prefix}{key}` |" in text, f"{name}: key {prefix}{key} missing"
+
+
+def test_a_changed_record_changes_its_table(monkeypatch):
+    before = schema_docs.render("group")
+    monkeypatch.setattr(Group.model_fields["label"], "description", "a changed meaning")
+    after = schema_docs.render("group")
+    assert before != after and "a changed meaning" in after
+
+
+def test_the_command_prints_the_tables_and_refuses_an_unknown_one(capsys):
+    assert schema_docs.main(["claim"]) == 0
+    assert "| `passes` |" in capsys.readouterr().out
+    assert schema_docs.main(["nothing"]) == 2
+    assert "unknown table 'nothing'" in capsys.readouterr().err

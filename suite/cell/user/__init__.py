@@ -4,7 +4,7 @@ A TOML file of ``[[problem]]`` and ``[[method]]`` entries (:mod:`.problems`, :mo
 loaded by ``--load FILE``, ``GNIBENCH_LOAD``, an experiment's ``load = [...]``, ``gnibench.load``
 or the entry points ``gnibench.problems`` / ``gnibench.methods`` (:mod:`.loader`). Expressions are
 read from a safe subset (:mod:`.expressions`); Python integrators run through
-:mod:`.python_methods`. The README's "User definitions" is the public contract.
+:mod:`.python_methods`. The documentation's reference page "User definitions" is the public contract.
 """
 from gnibench.suite.cell.user.loader import discover, load, loaded, unload
 

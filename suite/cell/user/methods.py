@@ -1,6 +1,6 @@
 """``[[method]]`` entries: tableaus, compositions and Python integrators as method records.
 
-Kinds (README, "User definitions"): ``explicit-rk`` (``c``, ``A`` lower triangle, ``b``; with
+Kinds (docs: reference, "User definitions"): ``explicit-rk`` (``c``, ``A`` lower triangle, ``b``; with
 ``b_hat`` and ``order_hat`` an embedded pair under the suite's step-size control), ``implicit-rk``
 (``c``, full ``A``, ``b``), ``partitioned-rk`` (``u`` and ``v``, each ``{A, b, c}``, for the
 blocks of the problem's partition), ``composition`` (``basis`` a registered method id, ``gamma``

@@ -1,7 +1,7 @@
 """Coefficients printed as decimals: a coefficient written to d >= 10 significant digits (Yoshida's
 0.784513610477560) is a rounding of the true one, so the order conditions of a user tableau or
 composition hold only to about 10^(2-d); they are then checked in doubles to that relative
-tolerance (README, "Declared order, checked"), exact ones exactly (:mod:`.methods`).
+tolerance (docs: reference, "User definitions"), exact ones exactly (:mod:`.methods`).
 """
 from __future__ import annotations
 

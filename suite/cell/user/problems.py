@@ -1,6 +1,6 @@
 """``[[problem]]`` entries: a user's ODE and its first integrals, made a :class:`Problem` record.
 
-Keys (README, "User definitions")::
+Keys (docs: reference, "User definitions")::
 
     id, title, reference, notes        # id required; the others text
     states = ["q", "p"]                # names; a Hamiltonian problem lists its q's, then its p's

@@ -1,6 +1,6 @@
 """Python integrators of the user's: the one place where gnibench steps in Python.
 
-Two kinds of ``[[method]]`` (README, "User definitions"):
+Two kinds of ``[[method]]`` (docs: reference, "User definitions"):
 
 * ``python``: ``entry = "module:function"`` names ``step(f, t, y, h) -> y_new`` (numpy arrays).
   gnibench calls it once per step, on the same grid as a compiled fixed-step method (``h``,
