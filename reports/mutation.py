@@ -67,6 +67,7 @@ def mutant_table(doc: dict) -> str:
     lines = ["| mutant | file | the bug | killed by |", "|---|---|---|---|"]
     for row in doc["mutants"]:
         verdict = _killer(row) if row["killed"] else \
+            f"inconclusive: {row['inconclusive']}" if row.get("inconclusive") else \
             "**survived**" + (f": {row['blind_spot']}" if row.get("blind_spot") else "")
         lines.append(f"| {row['id']} | `{row['file']}` | {_cell(row['description'])} | "
                      f"{_cell(verdict)} |")
@@ -81,7 +82,8 @@ def comparison_table(docs: dict[str, dict]) -> str:
         cells = []
         for d in docs.values():
             row = next((r for r in d["mutants"] if r["id"] == i), None)
-            cells.append("–" if row is None else ("killed" if row["killed"] else "**survived**"))
+            cells.append("–" if row is None else "killed" if row["killed"] else
+                         "inconclusive (time limit)" if row.get("inconclusive") else "**survived**")
         lines.append(f"| {i} | " + " | ".join(cells) + " |")
     lines.append("| **score** | " + " | ".join(f"{d['killed']}/{d['total']}" for d in docs.values())
                  + " |")
