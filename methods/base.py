@@ -1,9 +1,9 @@
 """The method and modifier records: self-describing, with a parameter schema.
 
 ``gnibench list methods``, the spec parser, the structure checks and the registry-wide tests are all
-driven by these records. Each record also carries ``generate(ctx) -> str``: the numba source of its
-``make_ws()`` and ``step(y, h, par, ws) -> (y1, nfev, njev, status)`` for one cell (see
-:mod:`gnibench.suite.cell.codegen`).
+driven by these records. Each compiled method also carries ``generate(ctx) -> str``, its family's
+step writer (methods/assembly/steps): the text of its ``make_ws()`` and ``step(y, h, par, ws) ->
+(y1, nfev, njev, status)`` for one cell (see :mod:`gnibench.methods.assembly`).
 """
 from __future__ import annotations
 

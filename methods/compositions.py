@@ -29,7 +29,7 @@ makes that its default).
 from __future__ import annotations
 
 from gnibench.methods.base import H_PARAM, NEWTON_PARAMS, Method
-from gnibench.methods.partitioned import _block, compose
+from gnibench.methods.assembly.steps.partitioned import composed_step
 
 
 def _symmetric(w):
@@ -72,16 +72,6 @@ assert [b for b, _ in MCLACHLAN4] == [a for _, a in reversed(MCLACHLAN4)]   # sy
 def substeps(data) -> tuple[tuple[float, float], ...]:
     """(u, v) coefficients per stage: a Störmer-Verlet composition γ gives (γ/2, γ/2)."""
     return tuple(x if isinstance(x, tuple) else (0.5 * x, 0.5 * x) for x in data)
-
-
-def composed_step(ctx) -> str:
-    """The step of every composition of Störmer-Verlet or of symplectic Euler and its adjoint (a
-    user's too, suite/cell/user/methods.py): its coefficients are read from ``par``
-    (``runtime_data``)."""
-    src_u, ws_u = _block(ctx, "u")
-    src_v, ws_v = _block(ctx, "v")
-    return (src_u + src_v + f"\n@njit(cache=True)\ndef make_ws():\n    return ({ws_u}, {ws_v})\n"
-            + compose(ctx.extra["data_at"]))
 
 
 def runtime_data(data) -> tuple[float, ...]:

@@ -7,7 +7,7 @@ One generator writes the cell's ``step`` (fixed step: the propagated solution) o
 (adaptive: also the scaled rms error and the verdict) and ``attempt_stages`` (the same lines, also
 returning the stages, for dense output); under ``sum=compensated`` they add the increment
 h Σ b_i k_i to y with the carried rounding error (methods/summation.py). The adaptive loop of
-methods/kernels/adaptive.py drives them with Hairer's controller (methods/kernels/pair.py).
+methods/assembly/templates/adaptive.py drives them with Hairer's controller (methods/assembly/templates/pair.py).
 """
 from __future__ import annotations
 
@@ -16,22 +16,11 @@ from fractions import Fraction as Fr
 
 import gnibench.methods.dop853_coefficients as dop853_data
 from gnibench.methods import order_conditions as oc
+from gnibench.methods.assembly.steps.pair import write_pair
 from gnibench.methods.base import Method, adaptive_params
-from gnibench.methods.dense_output import DenseOutput, generate_dense
-from gnibench.methods.events import (
-    dense_grid_rows,
-    dense_section_rows,
-    grid_functions,
-    root_functions,
-    variant,
-)
-from gnibench.methods.explicit_rk import combination, generate_erk, increment, stage_lines
-from gnibench.methods.kernels import adaptive
-from gnibench.methods.kernels import pair as pair_kernel
-from gnibench.methods.summation import compensated
-from gnibench.methods.tableau import Tableau, lit, require, tableau, verdict
+from gnibench.methods.dense_output import DenseOutput
+from gnibench.methods.tableau import Tableau, require, tableau, verdict
 from gnibench.suite.foundation.params import Param
-from gnibench.suite.foundation.templates import template
 
 
 @dataclass(frozen=True)
@@ -136,104 +125,6 @@ DOP853 = Pair(
                       reference="Hairer's DOP853, CONTD8; HNW I §II.6", tol=1e-11))
 
 
-def _error_lines(pair: Pair, n: int) -> list[str]:
-    """Scaled rms error of the step; DOP853 combines its 5th- and 3rd-order estimates."""
-    def comb(w, i):
-        return " + ".join(f"{lit(c)} * k{j}[{i}]" for j, c in enumerate(w) if c != 0)
-
-    lines = ["    acc = 0.0", "    acc3 = 0.0"]
-    for i in range(n):
-        lines.append(f"    sk = atol + rtol * max(abs(y[{i}]), abs(y1[{i}]))")
-        if pair.e3 is None:
-            lines.append(f"    acc += (h * ({comb(pair.e, i)}) / sk) ** 2")
-        else:
-            lines.append(f"    acc += (({comb(pair.e, i)}) / sk) ** 2")
-            lines.append(f"    acc3 += (({comb(pair.e3, i)}) / sk) ** 2")
-    if pair.e3 is None:
-        lines.append(f"    err = math.sqrt(acc / {n})")
-    else:  # DOP853: err = |h| err5^2 / sqrt(n (err5^2 + 0.01 err3^2))
-        lines += ["    deno = acc + 0.01 * acc3",
-                  "    if deno <= 0.0:", "        deno = 1.0",
-                  f"    err = abs(h) * acc / math.sqrt(deno * {n})"]
-    return lines
-
-
-def _pair_functions() -> str:
-    """The pair's parts of the adaptive loop (methods/kernels/pair.py); the small ones inlined."""
-    names = ("adaptive_ws", "controller_init", "controller_state", "controller_clip",
-             "controller_prepare", "attempt_outcome", "controller_accept", "controller_reject",
-             "dense_coeffs", "partial_adaptive")
-    small = ("adaptive_ws", "controller", "attempt_outcome")
-    return "".join(template(getattr(pair_kernel, name), inline=name.startswith(small))
-                   for name in names)
-
-
-def generate_adaptive(data: Pair):
-    def generate(ctx) -> str:
-        n, s, tab = ctx.n, data.tab.stages, data.tab
-        count = s - 1 if data.fsal else s
-        stages = stage_lines(tab, count, n, first="k0")
-        fsal = data.fsal and not data.lazy_last
-        knew = f"k{s - 1}" if fsal else "k0"  # else the loop evaluates f(y1) once accepted
-        if compensated(ctx.values):     # the increment h Σ b_i k_i added with the carried error
-            inc = increment(tab.doubles[1], n)
-            new_y, carry = [f"    y1, e1 = carry_add(y, e, {inc})"], "e1"
-        else:
-            new_y, carry = [f"    y1 = {combination(tab.doubles[1], n)}"], "e"
-        lines = (stages + new_y + ([f"    k{s - 1} = f(y1, par)"] if fsal else [])
-                 + _error_lines(data, n))
-        head = "(y, e, k0, h, par, ws, rtol, atol):"
-        # attempt_stages: the very same lines (hence the same y1 and err, bit for bit), also
-        # returning the stages for the continuous extension
-        ks = ", ".join(f"k{j}" for j in range(count)) + ("," if count == 1 else "")
-        body = (["\n@njit(cache=True)\ndef attempt" + head] + lines
-                + [f"    return y1, {carry}, err, {knew}"]
-                + ["\n@njit(cache=True)\ndef attempt_stages" + head] + lines
-                + [f"    return y1, {carry}, err, {knew}, ({ks})"])
-        sections = bool(ctx.problem is not None and ctx.problem.sections)
-        drive = adaptive.integrate_adaptive
-        src = (variant(drive, "integrate_adaptive") + grid_functions("adaptive", "partial_adaptive")
-               + variant(drive, "adaptive_grid", "GRID", "GRIDDED",
-                         rename={"grid_rows": "grid_rows_adaptive"}))
-        if sections:
-            src += variant(drive, "adaptive_section", "SECTION")
-        dense_nfev = 0.0
-        if data.dense is not None:            # integrate_dense and what it calls
-            dense_src = generate_dense(data.dense, tab, count, n)
-            dense_nfev = float(data.dense.new_stages(tab))
-            src += (dense_src + root_functions(n, sections) + dense_grid_rows()
-                    + variant(drive, "integrate_dense", "DENSE_OUTPUT", "GRIDDED", "WITH_STAGES",
-                              rename={"grid_rows": "grid_rows_dense"}))
-            if sections:
-                src += (dense_section_rows()
-                        + variant(drive, "adaptive_section_dense", "SECTION", "SECTION_DENSE",
-                                  "WITH_STAGES", rename={"section_rows": "section_rows_dense"}))
-        comma = "," if n == 1 else ""
-        shift = ", ".join(f"y[{i}] + h * v[{i}]" for i in range(n))
-        consts = (f"\nFSAL = {fsal}\nSTAGES_NEW = {float(count - 1 + fsal)!r}\n"
-                  f"IORD = {data.iord}\nEXPO = {data.expo!r}\nBETA = {data.beta!r}\n"
-                  f"SAFE = {data.safe!r}\nFAC1 = {data.fac1!r}\nFAC2 = {data.fac2!r}\n"
-                  f"DENSE_NFEV = {dense_nfev!r}\n"
-                  f"\n@njit(cache=True, inline='always')\ndef to_tuple_shift(y, h, v):\n"
-                  f"    return ({shift}{comma})\n")
-        return (consts + "\n".join(body) + "\n"
-                + template(adaptive.initial_step, inline=True)
-                + template(adaptive.first_step, inline=True)
-                + _pair_functions() + src)
-    return generate
-
-
-def _generate(pair: Pair):
-    fixed, adaptive_ = generate_erk(pair.tab), generate_adaptive(pair)
-
-    def generate(ctx) -> str:
-        src = fixed(ctx)
-        if ctx.values.get("adaptive"):
-            src += adaptive_(ctx)
-        return src
-    return generate
-
-
 DT_OUT = Param("dt_out", 0.0, "output on the grid k dt_out by dense output, the steps unchanged "
                "(0: a sample every `every` accepted steps)", low=0.0, only_if=("adaptive", True),
                show_default=False)
@@ -251,7 +142,7 @@ def embedded(id, pair, order, reference, doc, adaptive_default=True, rtol=1e-6,
              summation="plain"):
     """An embedded pair; ``summation``: the default of its option ``sum`` (methods/summation.py)."""
     return Method(id=id, family="embedded-rk", order=order, reference=reference, doc=doc,
-                  generate=_generate(pair), data=pair,
+                  generate=write_pair(pair), data=pair,
                   params=_params(adaptive_default, rtol, pair.dense is not None),
                   summation=summation)
 

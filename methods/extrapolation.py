@@ -4,7 +4,7 @@ The method is data: the step-number sequence n_j and ODEX's controller constants
 Column j of the tableau is Gragg's midpoint rule with n_j substeps and the smoothing step
 (HNW (9.13)), extrapolated by Aitken-Neville in h² (HNW (9.10)); with the harmonic sequence
 n_j = 2j the value T_kk has order 2k (HNW Theorem II.9.1). Adaptive mode (the default) runs
-ODEX's order and step-size control (methods/kernels/extrapolation.py); ``adaptive=false`` takes
+ODEX's order and step-size control (methods/assembly/templates/odex.py); ``adaptive=false`` takes
 fixed steps h with k columns, order 2k. ``sum=compensated`` adds the extrapolated increment to y
 with the carried rounding error (methods/summation.py).
 """
@@ -13,11 +13,9 @@ from __future__ import annotations
 import itertools
 from dataclasses import dataclass
 
+from gnibench.methods.assembly.steps.odex import write_odex
 from gnibench.methods.base import Method, adaptive_params
-from gnibench.methods.events import grid_functions, variant
-from gnibench.methods.kernels import adaptive, extrapolation
 from gnibench.suite.foundation.params import Param
-from gnibench.suite.foundation.templates import template
 
 
 @dataclass(frozen=True)
@@ -57,56 +55,7 @@ def harmonic(kmax: int) -> tuple[int, ...]:
 
 
 KMAX_LIMIT = 16
-#: the controller's small pieces, written into the loop (suite/foundation/inline.py)
-INLINE = {"adaptive_ws", "controller_init", "controller_state", "controller_clip",
-          "controller_prepare", "attempt", "attempt_outcome", "controller_accept",
-          "controller_reject"}
 ODEX = Extrapolation(sequence=harmonic(KMAX_LIMIT))
-
-
-def _generate(data: Extrapolation):
-    def generate(ctx) -> str:
-        v = ctx.values
-        kmax = int(v.get("kmax", 9)) if v.get("adaptive") else 0
-        k_fixed = int(v.get("k", 4))
-        size = max(kmax, k_fixed)
-        nj = data.sequence[:size]
-        consts = (f"\nNJ = {nj!r}\nWORK_A = {data.work(size)!r}\nKMAX = {kmax}\n"
-                  f"K_FIXED = {k_fixed}\nMSTAB = {data.mstab}\nJSTAB = {data.jstab}\n"
-                  f"SAFE1 = {data.safe1!r}\nSAFE2 = {data.safe2!r}\nSAFE3 = {data.safe3!r}\n"
-                  f"FAC1 = {data.fac1!r}\nFAC2 = {data.fac2!r}\nFAC3 = {data.fac3!r}\n"
-                  f"FAC4 = {data.fac4!r}\nUROUND = 2.3e-16\nHINIT_ORDER = {data.hinit_order}\n")
-        comma = "," if ctx.n == 1 else ""
-        shift = ", ".join(f"y[{i}] + h * v[{i}]" for i in range(ctx.n))
-        scale = ", ".join(f"a * v[{i}]" for i in range(ctx.n))
-        src = (consts + f"\n@njit(cache=True, inline='always')\ndef to_tuple_shift(y, h, v):\n"
-               f"    return ({shift}{comma})\n"
-               f"\n@njit(cache=True, inline='always')\ndef scaled(a, v):\n"
-               f"    return ({scale}{comma})\n"
-               + template(extrapolation.gragg_column, inline=True)
-               + template(extrapolation.neville, inline=True)
-               + "".join(template(getattr(extrapolation, name), inline=name == "solution")
-                         for name in ("make_ws", "fixed_increment", "step", "step_sum",
-                                      "solution")))
-        if kmax:
-            loop = adaptive.integrate_adaptive
-            src += ("\nFSAL = False\n"
-                    + template(adaptive.initial_step, {"IORD": "HINIT_ORDER"}, inline=True)
-                    + template(adaptive.first_step, inline=True)
-                    + "".join(template(getattr(extrapolation, name), inline=name in INLINE)
-                              for name in ("column", "adaptive_ws", "controller_init",
-                                           "controller_state", "controller_clip",
-                                           "controller_prepare", "attempt", "attempt_outcome",
-                                           "controller_accept", "controller_reject",
-                                           "partial_adaptive"))
-                    + variant(loop, "integrate_adaptive")
-                    + grid_functions("adaptive", "partial_adaptive")
-                    + variant(loop, "adaptive_grid", "GRID", "GRIDDED",
-                              rename={"grid_rows": "grid_rows_adaptive"}))
-            if ctx.problem is not None and ctx.problem.sections:
-                src += variant(loop, "adaptive_section", "SECTION")
-        return src
-    return generate
 
 
 def _params():
@@ -127,4 +76,4 @@ odex = Method(id="odex", family="extrapolation", order=8,
               reference="HNW I §II.9; Hairer's ODEX (beyond the seeds)",
               doc="GBS extrapolation (harmonic sequence), adaptive order and step as in ODEX; "
                   "fixed mode: k columns, order 2k (declared order: the default k=4)",
-              generate=_generate(ODEX), data=ODEX, params=_params(), summation="plain")
+              generate=write_odex(ODEX), data=ODEX, params=_params(), summation="plain")

@@ -6,7 +6,7 @@ as published (rationals, Q(√6), decimals converted digit for digit); here they
 arithmetic on construction (methods/order_conditions.py): b at the pair's order p, b̂ = b - e at
 its embedded order, the interpolant at its order as a polynomial identity in θ. They run through
 the same generator and adaptive driver as DOPRI5 and DOP853 (methods/embedded_rk.py,
-methods/kernels/adaptive.py), with dense output by polynomial weights (methods/dense_output.py).
+methods/assembly/templates/adaptive.py), with dense output by polynomial weights (methods/dense_output.py).
 
 Controller (choice, as for DOP853 in Hairer's code): the estimate of a p(p-1) pair is O(h^p), so
 err^(1/p) drives the step (Feagin 10(8): O(h^9), 1/9); no PI term (beta = 0), safety 0.9, step

@@ -1,10 +1,10 @@
 """Implicit Runge-Kutta methods: tableaus as data, one Newton kernel for the family.
 
-Stages are solved by full Newton with the field's Jacobian to round-off (methods/kernels/irk.py).
+Stages are solved by full Newton with the field's Jacobian to round-off (methods/assembly/templates/irk.py).
 A step that does not converge in ``newton_maxit`` iterations ends the run with status
 ``newton_failed``. With ``fixed_point = K`` the stages are solved instead by at most K fixed-point
 iterations (no Jacobian); a step that has not converged then is accepted with its last iterate and
-counted in ``njev`` ([HLW] Fig 2.4's implicit Euler, see methods/kernels/irk.py).
+counted in ``njev`` ([HLW] Fig 2.4's implicit Euler, see methods/assembly/templates/irk.py).
 ``sum=compensated`` adds the increment Σ d_j Z_j with the carried rounding
 error (methods/summation.py).
 """
@@ -12,11 +12,10 @@ from __future__ import annotations
 
 from fractions import Fraction as Fr
 
+from gnibench.methods.assembly.steps.irk import write_irk
 from gnibench.methods.base import H_PARAM, NEWTON_PARAMS, Method
-from gnibench.methods.kernels import irk
-from gnibench.methods.tableau import Tableau, lit, tableau
+from gnibench.methods.tableau import Tableau, tableau
 from gnibench.suite.foundation.params import Param
-from gnibench.suite.foundation.templates import template
 
 IMPLICIT_EULER = tableau([[1]], [1], [1], order=1)                      # [HLW] (1.6)
 IMPLICIT_MIDPOINT = tableau([["1/2"]], [1], ["1/2"], order=2)           # [HLW] (1.7)
@@ -48,28 +47,6 @@ def _d_coefficients(tab: Tableau) -> tuple[Fr, ...]:
     return tuple(rows[i][s] for i in range(s))
 
 
-def generate_irk(tab: Tableau):
-    d = _d_coefficients(tab)
-
-    def generate(ctx) -> str:
-        consts = [f"S = {tab.stages}",
-                  "A = (" + ", ".join("(" + ", ".join(lit(x) for x in row) + ",)"
-                                      for row in tab.a) + ",)",
-                  "D = (" + ", ".join(lit(x) for x in d) + ",)"]
-        if int(ctx.values.get("fixed_point", 0)):   # fixed-point iteration instead of Newton
-            # the number of iterations is read from par: a sweep over it is one kernel
-            consts.append(f"FIXED_POINT_AT = {ctx.extra['par_at']['fixed_point']}")
-            solver = template(irk.stages_fixed_point, {"stages_fixed_point": "stages"},
-                              inline=True)
-        else:
-            solver = template(irk.stages, inline=True)
-        return ("\n" + "\n".join(consts) + "\n" + template(irk.make_ws, inline=True) + solver
-                + template(irk.increment, inline=True) + template(irk.step, inline=True)
-                + template(irk.step_sum, inline=True))
-
-    return generate
-
-
 FIXED_POINT_PARAM = Param(
     "fixed_point", 0, "solve the stages by at most this many fixed-point iterations instead of "
     "Newton (0: Newton); a step not converged then is accepted and counted in njev",
@@ -78,7 +55,7 @@ FIXED_POINT_PARAM = Param(
 
 def irk_method(id, tab, reference, doc, summation="plain", **props):
     return Method(id=id, family="implicit-rk", order=tab.order, reference=reference, doc=doc,
-                  generate=generate_irk(tab), data=tab, implicit=True,
+                  generate=write_irk(tab, _d_coefficients(tab)), data=tab, implicit=True,
                   params=(H_PARAM,) + NEWTON_PARAMS + (FIXED_POINT_PARAM,), summation=summation,
                   runtime=("fixed_point",), **props)
 

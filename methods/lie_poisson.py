@@ -51,6 +51,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from gnibench.methods.assembly.steps.lie_poisson import write_lie_poisson
 from gnibench.methods.base import H_PARAM, Method
 from gnibench.methods.compositions import YOSHIDA4
 from gnibench.suite.foundation.errors import UserError
@@ -89,55 +90,6 @@ def schedule(order: int) -> list[tuple[int, float]]:
         else:
             merged.append((i, w))
     return merged
-
-
-TWO_SUM = """
-@njit(cache=True)
-def two_sum(a, b):
-    # Knuth's error-free sum: s + err == a + b exactly
-    s = a + b
-    bb = s - a
-    return s, (a - (s - bb)) + (b - bb)
-"""
-
-
-def _flow_source(i: int) -> str:
-    """flow_i(y, e, tau, par): the exact flow of (1/2) λ_i x_i² for the time tau, on x = y + e.
-
-    The rotation is applied as x + (s R x - (1 - c) x) with 1 - c = 2 sin²(ωτ/2) (no cancellation),
-    and the increment is added by an error-free sum whose error is kept in e (compensated summation,
-    reset every step): H1, H2 then see one rounding per coordinate per step, not one per sub-flow.
-    """
-    (a, b), (c, d) = ROTATIONS[i]
-    out = ["", "@njit(cache=True)", f"def flow_{i}(y, e, tau, par):",
-           (f"    # exact flow of (1/2) lam{i + 1} x{i + 1}^2: planes (x{a + 1}, x{b + 1}), "
-            f"(x{c + 1}, x{d + 1})"),
-           f"    half = 0.5 * par[{i}] * (y[{i}] + e[{i}]) * tau",
-           "    sh = math.sin(half)", "    si = 2.0 * sh * math.cos(half)",
-           "    vc = 2.0 * sh * sh                  # 1 - cos, without cancellation"]
-    for p, q in ((a, b), (c, d)):
-        out += [f"    xp = y[{p}] + e[{p}]", f"    xq = y[{q}] + e[{q}]",
-                f"    y{p}, e{p} = two_sum(y[{p}], e[{p}] + (si * xq - vc * xp))",
-                f"    y{q}, e{q} = two_sum(y[{q}], e[{q}] - (si * xp + vc * xq))"]
-    moved = {a, b, c, d}
-    ys = ", ".join(f"y{k}" if k in moved else f"y[{k}]" for k in range(6))
-    es = ", ".join(f"e{k}" if k in moved else f"e[{k}]" for k in range(6))
-    out.append(f"    return ({ys}), ({es})")
-    return "\n".join(out) + "\n"
-
-
-def generate(ctx) -> str:
-    if ctx.modified:
-        raise UserError("method lie-poisson integrates (7.1) itself by exact sub-flows and cannot "
-                        "take a field modifier (observer, penalty); use +projection, or another method")
-    plan = schedule(int(ctx.values["order"]))
-    body = "".join(f"    y, e = flow_{i}(y, e, {w!r} * h, par)\n" for i, w in plan)
-    final = ", ".join(f"y[{k}] + e[{k}]" for k in range(6))
-    return (TWO_SUM + "".join(_flow_source(i) for i in range(6))
-            + "\n@njit(cache=True)\ndef make_ws():\n    return 0\n"
-            + "\n@njit(cache=True)\ndef step(y, h, par, ws):\n"
-            + "    e = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)\n"
-            + body + f"    return ({final}), {float(len(plan))!r}, 0.0, STATUS_OK\n")
 
 
 _SO4_CHECKED: dict[str, bool] = {}
@@ -185,7 +137,7 @@ lie_poisson = LiePoissonMethod(
     id="lie-poisson", family="splitting", order=2, reference="[B] §7.2; Ge-Marsden, Channell-Scovel",
     doc="Lie-Poisson splitting for euler-so4 into exact coadjoint rotations (Strang, or Yoshida's "
         "triple jump with order=4); conserves the Casimirs H1, H2 to round-off",
-    generate=generate, symmetric=True, needs=("so4",),
+    generate=write_lie_poisson(ROTATIONS, schedule), symmetric=True, needs=("so4",),
     field_modifiers_refused="it integrates (7.1) itself by exact sub-flows",
     params=(H_PARAM, Param("order", "2", "order of the composition: 2 (Strang) or 4 (Yoshida "
                                          "triple jump)", kind="str", choices=("2", "4"))))

@@ -23,14 +23,16 @@ partial ones under ``partial=``. An observed set of partial integrals must be cl
 (L_ab = 0 for observed a, unobserved b), else it is not a q-partial first integral itself. The
 Jacobian's leading term is then −D_Hᵀ G⁻¹ (K + L) D_H.
 
-H0 is the value of the observed integrals at the initial point unless given. The generated code is
-unrolled over the q observed integrals (q is small), with the q x q system solved by Cholesky.
+H0 is the value of the observed integrals at the initial point unless given. The term's code
+(methods/assembly/steps/modifiers.py) is unrolled over the q observed integrals (q is small),
+with the q x q system solved by Cholesky.
 For implicit methods the Jacobian of the term is its leading part, −D_Hᵀ G⁻¹ K D_H (observer) or
 −D_Hᵀ K D_H (penalty): the dropped terms are proportional to H0 − H, so Newton still converges to
 round-off, since the residual it drives to zero is exact.
 """
 from __future__ import annotations
 
+from gnibench.methods.assembly.steps.modifiers import write_term
 from gnibench.methods.base import Modifier
 from gnibench.suite.foundation.errors import UserError
 from gnibench.suite.foundation.params import Param
@@ -157,117 +159,9 @@ def _runtime_size(values):
     return len(on) + (q if values["mode"] == "simple" else 2 * q)
 
 
-def _dot(a, b, n):
-    return " + ".join(f"{a}[{i}] * {b}[{i}]" for i in range(n))
-
-
-def _cholesky(q):
-    """Lines computing the Cholesky factor l_ij of G = (G_ij) (lower triangle, unrolled)."""
-    lines = []
-    for j in range(q):
-        s = " - ".join([f"G{j}{j}"] + [f"l{j}{k} * l{j}{k}" for k in range(j)])
-        lines.append(f"l{j}{j} = math.sqrt({s})")
-        for i in range(j + 1, q):
-            s = " - ".join([f"G{i}{j}"] + [f"l{i}{k} * l{j}{k}" for k in range(j)])
-            lines.append(f"l{i}{j} = ({s}) / l{j}{j}")
-    return lines
-
-
-def _solve(q, rhs, out):
-    """Lines solving G out = rhs with the Cholesky factor (forward, then back substitution)."""
-    lines = []
-    for i in range(q):
-        s = " - ".join([rhs[i]] + [f"z{k} * l{i}{k}" for k in range(i)])
-        lines.append(f"z{i} = ({s}) / l{i}{i}")
-    for i in reversed(range(q)):
-        s = " - ".join([f"z{i}"] + [f"{out[k]} * l{k}{i}" for k in range(i + 1, q)])
-        lines.append(f"{out[i]} = ({s}) / l{i}{i}")
-    return lines
-
-
-def _prelude(kind, ctx, values, off):
-    """Common lines: gradients g_a, errors e_a = H0_a − H_a (−h_a for a partial integral, whose
-    target is 0), gains th_a (and G, its factor). Observed rows: first integrals, then partial."""
-    names = ctx.meta["integrals"]
-    pnames = ctx.meta.get("partial_integrals", [])
-    on, partial = _observed(values)
-    idx = [names.index(x) for x in on]
-    pidx = [pnames.index(x) for x in partial]
-    qo, q, n = len(idx), len(idx) + len(pidx), ctx.n
-    lines = [f"g{a} = grad_{k}(y, par)" for a, k in enumerate(idx)]
-    lines += [f"g{qo + a} = pgrad_{k}(y, par)" for a, k in enumerate(pidx)]
-    lines += [f"e{a} = par[{off + a}] - integral_{k}(y, par)" for a, k in enumerate(idx)]
-    lines += [f"e{qo + a} = -partial_{k}(y, par)" for a, k in enumerate(pidx)]
-    if kind == "observer":
-        lines += [f"G{a}{b} = {_dot(f'g{a}', f'g{b}', n)}" for a in range(q) for b in range(a + 1)]
-        lines += _cholesky(q)
-    gain = off + qo
-    if values["mode"] == "simple":
-        lines += [f"th{a} = par[{gain + a}]" for a in range(q)]
-    else:
-        beta = [f"par[{gain + q + b}]" for b in range(q)]
-        if kind == "observer":
-            # (G^-1)_bb from G x = e_b; Frobenius norm of D_H^T G^-1 L(beta)   [B] §2
-            for b in range(q):
-                unit = ["1.0" if i == b else "0.0" for i in range(q)]
-                lines += _solve(q, unit, [f"u{b}_{i}" for i in range(q)])
-            norm2 = " + ".join(f"{beta[b]} * {beta[b]} * u{b}_{b}" for b in range(q))
-        else:
-            norm2 = " + ".join(f"{beta[b]} * {beta[b]} * ({_dot(f'g{b}', f'g{b}', n)})"
-                               for b in range(q))
-        lines.append(f"inv_norm = 1.0 / math.sqrt({norm2})")
-        lines += [f"th{a} = par[{gain + a}] * inv_norm" for a in range(q)]
-    # L of [B] (2.12) on the observed partial rows: lr{a}[j] = L_{a, j} (j: problem-level index)
-    lines += [f"lr{qo + a} = pl_{k}(y, par)" for a, k in enumerate(pidx)]
-    return lines, q, qo, pidx
-
-
-def _lmat(qo, q, pidx):
-    """Entries of the observed block of L as text, (a, b) -> expr, only for partial rows/columns."""
-    return {(a, b): f"lr{a}[{pidx[b - qo]}]" for a in range(qo, q) for b in range(qo, q)}
-
-
-def _generate(kind):
-    def generate(ctx, values, k, off):
-        n = ctx.n
-        pre, q, qo, pidx = _prelude(kind, ctx, values, off)
-        L = _lmat(qo, q, pidx)
-        # right-hand side of G x = K (H0 - H) - L H, [B] (2.5), (2.13) (reading in the docstring);
-        # with e = -H on the partial rows, -L H = L e
-        rhs = [f"th{a} * e{a}" + "".join(f" + {L[a, b]} * e{b}" for b in range(qo, q) if a >= qo)
-               for a in range(q)]
-        if kind == "observer":
-            body = pre + _solve(q, rhs, [f"x{a}" for a in range(q)])
-        else:
-            body = pre + [f"x{a} = th{a} * e{a}" for a in range(q)]
-        comps = ", ".join(" + ".join(f"x{a} * g{a}[{i}]" for a in range(q)) for i in range(n))
-        ref = ("(2.5)" + (", (2.13)" if q > qo else "")) if kind == "observer" else "(2.10)"
-        term = (f"\n@njit(cache=True)\ndef mod{k}_term(y, par):\n    # {kind} [B] {ref}\n"
-                + "".join(f"    {ln}\n" for ln in body)
-                + f"    return ({comps}{',' if n == 1 else ''})\n")
-        # Jacobian, leading term: -D_H^T W D_H with W = G^-1 (K + L) (observer) or K (penalty)
-        jac = list(pre)
-        if kind == "observer":
-            for b in range(q):
-                unit = ["1.0" if i == b else "0.0" for i in range(q)]
-                jac += _solve(q, unit, [f"w{a}_{b}" for a in range(q)])
-            for a in range(q):
-                for b in range(q):
-                    extra = "".join(f" + w{a}_{c} * {L[c, b]}" for c in range(qo, q) if b >= qo)
-                    jac.append(f"c{a}_{b} = w{a}_{b} * th{b}{extra}")
-            wsum = " + ".join(f"g{a}[i] * c{a}_{b} * g{b}[j]" for a in range(q) for b in range(q))
-        else:
-            wsum = " + ".join(f"g{a}[i] * th{a} * g{a}[j]" for a in range(q))
-        jac += ["for i in range(N):", "    for j in range(N):", f"        J[i, j] -= {wsum}"]
-        jacs = (f"\n@njit(cache=True)\ndef mod{k}_jac(y, par, J):\n"
-                + "".join(f"    {ln}\n" for ln in jac))
-        return term + jacs
-    return generate
-
-
 def _modifier(kind, reference, doc):
     return Modifier(id=kind, reference=reference, doc=doc, params=_COMMON,
-                    resolve=_resolve(kind), generate=_generate(kind), runtime=_runtime,
+                    resolve=_resolve(kind), generate=write_term(kind), runtime=_runtime,
                     runtime_size=_runtime_size, needs_independent=(kind == "observer"))
 
 

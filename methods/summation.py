@@ -18,13 +18,14 @@ where the last line, the error of the addition, is computed here by Knuth's TwoS
 a and b (Neumaier's improvement of Kahan's summation, Kahan-Babuška; Neumaier 1974), where
 HLW's three-operation form needs |y_n| >= |x| (a component that crosses zero breaks it). The state
 used everywhere (fields, error estimates, samples) is the rounded y_n; e (|e| <= ulp(y_n)/2) lives
-in row ``ROW_CARRY`` of ``y_io`` between calls (methods/kernels/slots.py), so a run paused and
+in row ``ROW_CARRY`` of ``y_io`` between calls (methods/assembly/templates/slots.py), so a run paused and
 resumed anywhere gives the same bits. The time t of the adaptive drivers is summed the same way
 (slot ``ST_T_CARRY``), and their last step is (t_end - t_n) - e_t, so the steps add up to t_end.
 Partial steps of a time grid and the located section points start from y_n + e_n. A step modifier
 (``+projection``) or a problem's identification map (``post_step``) that moves the point drops
 the carry (the new point is not y_{n+1} + e). ``sum=plain`` (the default of the seeds' methods)
-generates exactly the code it did before this option existed: same operations, same bits.
+generates exactly the code it did before this option existed: same operations, same bits. The
+carries' code is written into every kernel module (methods/assembly/cell.py ``carry_source``).
 """
 from __future__ import annotations
 
@@ -45,27 +46,3 @@ def sum_param(default: str = "plain") -> Param:
 def compensated(values: dict) -> bool:
     """True when a method's values ask for compensated summation."""
     return values.get("sum") == "compensated"
-
-
-def carry_source(n: int) -> str:
-    """The helpers every generated module holds (used only under sum=compensated):
-
-    ``carry_sum(a, e, d) -> (s, e')``: a + (e + d) rounded, and the exact error of that addition;
-    ``carry_add(y, e, d) -> (y', e')``: the same over the n components of tuples;
-    ``carry_apply(y, e)``: y + e rounded (a point that starts from the carried state);
-    ``carry_zero(y)``: a zero carry of y's shape."""
-    comma = "," if n == 1 else ""
-    lines = ["\n@njit(cache=True, inline='always')\ndef carry_sum(a, e, d):",
-             "    # [HLW] VIII.5 Alg. 5.1 with Knuth's TwoSum: s + err == a + (e + d) exactly",
-             "    x = e + d", "    s = a + x", "    b = s - a",
-             "    return s, (a - (s - b)) + (x - b)",
-             "\n@njit(cache=True, inline='always')\ndef carry_add(y, e, d):"]
-    for i in range(n):
-        lines.append(f"    s{i}, c{i} = carry_sum(y[{i}], e[{i}], d[{i}])")
-    lines.append(f"    return ({', '.join(f's{i}' for i in range(n))}{comma}), "
-                 f"({', '.join(f'c{i}' for i in range(n))}{comma})")
-    lines += ["\n@njit(cache=True, inline='always')\ndef carry_apply(y, e):",
-              f"    return ({', '.join(f'y[{i}] + e[{i}]' for i in range(n))}{comma})",
-              "\n@njit(cache=True, inline='always')\ndef carry_zero(y):",
-              f"    return ({', '.join('0.0' for _ in range(n))}{comma})"]
-    return "\n".join(lines) + "\n"

@@ -122,7 +122,7 @@ class Problem(Registered):
     post_step:
         Identification map applied after every accepted step, e.g. the homography that maps a
         geodesic back into the fundamental octagon ([B] (8.3)-(8.4)). A numba-compilable template
-        function ``post_step(y, par) -> y`` (free names as in methods/kernels/free.py).
+        function ``post_step(y, par) -> y`` (its free names bound in the kernel module: methods/assembly/bindings.py).
     origin, definition:
         Where a user definition comes from (None for the shipped problems): a picklable object
         whose ``load()`` defines it in a process that lacks it

@@ -10,8 +10,9 @@ The generated text defines, with the state ``y`` a tuple of N floats and ``par``
 * ``section_g_<j>``, ``section_grad_<j>``, ``section_cond_<j>`` (y, par): g, grad g and the crossing
   condition of the problem's j-th Poincaré section (:mod:`gnibench.suite.cell.sections`).
 
-The text and a small JSON of metadata are cached on disk, keyed by the hash of the sources that
-produce them, so that a warm run never imports sympy.
+Every function is decorated ``@shared`` (methods/assembly/source.py: cached by numba, and written
+into its compiled callers by numba's inliner). The text and a small JSON of metadata are cached on
+disk, keyed by the hash of the sources that produce them, so that a warm run never imports sympy.
 """
 from __future__ import annotations
 
@@ -141,7 +142,7 @@ def _generate(problem) -> tuple[str, dict]:
         out += _function(f"section_cond_{j}", ys, ps, [cond], kind="scalar",
                          comment=f"crossing condition (> 0) of section {sec.name}")
     calls = ", ".join(f"integral_{k}(y, par)" for k in range(len(names)))
-    out += ["", "@njit(cache=True)", "def invariants(y, par):",
+    out += ["", "@shared", "def invariants(y, par):",
             f"    return ({calls}{',' if len(names) == 1 else ''})"]
     meta = {"n": n, "integrals": names, "explicit_u": False, "explicit_v": False,
             "u_idx": [], "v_idx": []}
@@ -227,7 +228,7 @@ def _function(name, ys, ps, exprs, kind, shape=None, comment=None):
     subs, reduced = sp.cse(exprs, symbols=sp.numbered_symbols("t_"),
                            optimizations=_cse_steps(kind))
     args = "y, par, M" if kind == "matrix" else "y, par"
-    lines = ["", "@njit(cache=True)", f"def {name}({args}):"]
+    lines = ["", "@shared", f"def {name}({args}):"]
     if comment:
         lines.append(f"    # {comment}")
     used = set().union(*[e.free_symbols for e in exprs]) if exprs else set()
@@ -271,7 +272,7 @@ def python_functions(problem) -> dict:
     if text not in _python:
         import math
 
-        namespace = {"math": math, "njit": lambda **kw: (lambda fn: fn)}
+        namespace = {"math": math, "shared": lambda fn: fn, "internal": lambda fn: fn}
         exec(compile(text, f"<{problem.id} python>", "exec"), namespace)  # noqa: S102 - our codegen
         _python[text] = namespace
     return _python[text]

@@ -48,16 +48,19 @@ class Job:
 
 def _digest_file(path: Path) -> str | None:
     from gnibench.suite.foundation.cache import digest
+    from gnibench.suite.foundation.files import read_regular
 
     try:
-        return digest(path.read_bytes())
+        return digest(read_regular(path))
     except OSError:
         return None
 
 
 def _read_manifest(d: Path) -> dict:
+    from gnibench.suite.foundation.files import read_regular
+
     try:
-        doc = json.loads((d / MANIFEST).read_text(encoding="utf-8"))
+        doc = json.loads(read_regular(d / MANIFEST))
     except (OSError, ValueError):
         return {}
     return doc if isinstance(doc, dict) else {}

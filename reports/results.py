@@ -73,17 +73,19 @@ def damaged(path: Path):
 
 def read_table(path: Path, columns: list[str] | None = None):
     import pandas as pd
+    from gnibench.suite.foundation.files import open_regular_file
 
-    with damaged(path):
-        return pd.read_parquet(path, columns=columns)
+    with damaged(path), open_regular_file(path) as f:
+        return pd.read_parquet(f, columns=columns)
 
 
 def parquet_meta(path: Path) -> dict:
     """The provenance (schema metadata key ``gnibench``) of a Parquet file."""
     import pyarrow.parquet as pq
+    from gnibench.suite.foundation.files import open_regular_file
 
-    with damaged(path):
-        md = pq.read_schema(path).metadata or {}
+    with damaged(path), open_regular_file(path) as f:
+        md = pq.read_schema(f).metadata or {}
         return json.loads(md.get(b"gnibench", b"{}"))
 
 

@@ -19,28 +19,11 @@ unloaded after it.
 from __future__ import annotations
 
 import json
-import statistics
 from collections import defaultdict
 from pathlib import Path
 
 import pytest
-from gnibench.suite.foundation import datastack
-
-# the test processes do gnibench's work as its commands and API do, with the frame-stack chunks
-# kept for reuse (suite/foundation/datastack.py; tests/kernels/test_datastack.py also runs without them)
-datastack.install()
-
-TESTS = Path(__file__).resolve().parent
-#: measured seconds per test module (path relative to tests/), written by --store-durations
-DURATIONS = TESTS / "durations.json"
-
-
-def read_durations() -> dict[str, float]:
-    """The measured duration of each test module (tests/durations.json), or {} without one."""
-    try:
-        return {str(k): float(v) for k, v in json.loads(DURATIONS.read_text()).items()}
-    except (OSError, ValueError, AttributeError):
-        return {}
+from support_order import DURATIONS, TESTS, longest_first, read_durations  # noqa: F401
 
 
 def pytest_addoption(parser):
@@ -51,13 +34,6 @@ def pytest_addoption(parser):
 
 def _module(path) -> str:
     return Path(path).resolve().relative_to(TESTS).as_posix()
-
-
-def longest_first(modules: list[str], durations: dict[str, float]) -> list[str]:
-    """The modules (paths relative to tests/) by measured duration, longest first (a stable
-    sort); a module without a measurement at the median of the others."""
-    default = statistics.median(durations.values()) if durations else 0.0
-    return sorted(modules, key=lambda m: -durations.get(m, default))
 
 
 def pytest_collection_modifyitems(session, config, items):
@@ -129,7 +105,7 @@ def _freeze_alive() -> None:
 
 def _collector_settings() -> None:
     """The process is frozen before the test modules are imported: gnibench's own freezing while
-    it compiles (``gnibench.suite.cell.codegen.compiling``) then leaves it as it is, also for a
+    it compiles (``gnibench.methods.assembly.loading.compiling``) then leaves it as it is, also for a
     kernel compiled at collection. The oldest generation is collected before each module only
     (third threshold 10**9; the young generations keep their thresholds); a process forked from
     a test process (a pool worker, the drawing process) inherits both, for its short life."""

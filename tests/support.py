@@ -8,7 +8,6 @@ every eligible combination.
 from __future__ import annotations
 
 import functools
-import math
 import os
 
 import numpy as np
@@ -44,11 +43,11 @@ def takes(pid: str, method: str) -> bool:
 @functools.cache
 def base_module(spec: str):
     """(module, problem Bound, par) of a problem's generated code (its own compiled module)."""
-    from gnibench.suite.cell.codegen import load_problem
+    from gnibench.methods.assembly import assemble_problem
     from gnibench.suite.cell.spec import parse_problem
 
     prob = parse_problem(spec)
-    mod, _ = load_problem(prob)
+    mod = assemble_problem(prob)
     return mod, prob, np.array(prob.record.par(prob.values), dtype=np.float64)
 
 
@@ -122,56 +121,3 @@ def section_oscillator(monkeypatch, oid: str):
                           coords=("p",)),))
     monkeypatch.setitem(problems.REGISTRY, oid, rec)
     return rec
-
-
-def sample_step(y, h, out):
-    """A small function shaped like a generated step (tuple arithmetic, arrays, a loop, a branch,
-    literals, builtins, math, int and bool results): what the numba patch tests compile with
-    and without their patch."""
-    k1 = (y[1], -y[0] / math.sqrt(y[0] * y[0] + 1.0))
-    z = (y[0] + 0.5 * h * k1[0], y[1] + 0.5 * h * k1[1])
-    s = 0.0
-    for i in range(2):
-        out[i] = z[i] * 2 - y[i] ** 2
-        if out[i] < 0.0:
-            s -= out[i]
-        else:
-            s += out[i]
-    return min(s, 1e300), max(z[0], z[1]), int(s > 0.0), bool(s)
-
-
-def numba_types(dispatcher) -> tuple[dict, list]:
-    """The variable types and call signatures of a dispatcher's first compilation, as text."""
-    cres = dispatcher.overloads[dispatcher.signatures[0]]
-    return ({str(k): str(v) for k, v in cres.fndesc.typemap.items()},
-            sorted(str(v) for v in cres.fndesc.calltypes.values()))
-
-
-def with_and_without(patch: str, produce: str, after_uninstall: str = "") -> tuple:
-    """In a fresh interpreter: ``produce`` (``module:function`` under tests/) called with
-    ``gnibench.suite.foundation.<patch>`` installed, then again after its ``uninstall()`` (for
-    good in that process; ``after_uninstall`` is a statement checking numba's own code is back);
-    both results."""
-    import pickle
-    import subprocess
-    import sys
-    import textwrap
-    from pathlib import Path
-
-    module, function = produce.split(":")
-    code = textwrap.dedent(f"""
-        import pickle, sys
-        sys.path.insert(0, "tests")       # as pytest has it: the test files import support
-        from gnibench.suite.foundation import {patch} as patch
-        import tests.kernels.{module} as t
-        assert patch.install()
-        first = t.{function}()
-        patch.uninstall()
-        {after_uninstall}
-        second = t.{function}()
-        sys.stdout.buffer.write(pickle.dumps((first, second)))
-    """)
-    root = Path(__file__).resolve().parent.parent
-    done = subprocess.run([sys.executable, "-c", code], cwd=root, capture_output=True,
-                          check=True, timeout=300)
-    return pickle.loads(done.stdout)

@@ -1,11 +1,12 @@
 """The layout: one import package ``gnibench``, floors that import downwards only, no import cycle.
 
-Floors, from the ground up (README, "Layout"; ``suite/__init__.py``)::
+Floors, from the ground up (docs/explanation/architecture.md, kept equal to :data:`FLOORS` by
+:func:`test_the_architecture_page_shows_the_floors`)::
 
-    0 gnibench.suite.foundation   errors, parameter schemas and bounds, status, disk cache, templates
+    0 gnibench.suite.foundation   errors, parameter schemas and bounds, status, the verified cache
     1 gnibench.problems           problem records, sympy -> numba source
-    2 gnibench.methods            method and modifier records, kernel templates, external engines
-    3 gnibench.suite.cell         specs, code generation, the driver facade, solve, sections, references
+    2 gnibench.methods            method and modifier records, kernel assembly, external engines
+    3 gnibench.suite.cell         specs, the typed cell, compiled cells, the driver, references
     4 gnibench.suite.metrics      measurements of a trajectory
     5 gnibench.suite.runs         experiments, runner, tables, storage, bench
     6 gnibench.suite.ledger       the claims ledger: entries, closed forms, identity checks, verdicts
@@ -250,7 +251,7 @@ def test_the_measured_durations_name_test_modules():
     """tests/durations.json (written by ``pytest --store-durations``; the modules are handed to
     the workers longest first, tests/conftest.py) holds a duration >= 0 for test modules that
     exist, and for most of them: a module renamed or removed, or a stale file, fails here."""
-    from conftest import read_durations
+    from support_order import read_durations
 
     durations = read_durations()
     modules = {p.relative_to(ROOT / "tests").as_posix() for p in (ROOT / "tests").rglob("test_*.py")}
@@ -265,9 +266,44 @@ def test_the_measured_durations_name_test_modules():
 def test_modules_are_handed_out_longest_first():
     """The order of the modules: measured durations, longest first; an unmeasured module at the
     median; ties in collection order."""
-    from conftest import longest_first
+    from support_order import longest_first
 
     durations = {"a.py": 5.0, "b.py": 50.0, "c.py": 1.0, "d.py": 20.0}
     assert longest_first(["a.py", "b.py", "c.py", "d.py", "new.py", "e.py"], durations) == [
         "b.py", "d.py", "new.py", "e.py", "a.py", "c.py"]           # median 12.5
     assert longest_first(["x.py", "y.py"], {}) == ["x.py", "y.py"]
+
+
+def test_test_modules_have_unique_basenames():
+    """The test folders are not packages (pytest's rootdir-relative ``prepend`` import), so two
+    test modules with one basename, in tests/ or benchmarks/, clash at collection."""
+    seen: dict[str, str] = {}
+    for folder in ("tests", "benchmarks"):
+        for path in sorted((ROOT / folder).rglob("*.py")):
+            if path.name in ("conftest.py", "__init__.py"):
+                continue
+            rel = path.relative_to(ROOT).as_posix()
+            assert path.name not in seen, f"{rel} and {seen[path.name]} share a basename"
+            seen[path.name] = rel
+
+
+ARCHITECTURE = ROOT / "docs" / "explanation" / "architecture.md"
+
+
+def test_the_architecture_page_shows_the_floors():
+    """The floor diagram of docs/explanation/architecture.md is :data:`FLOORS`, in order, and
+    every folder or file the page names (in backticks, or in the diagram) exists."""
+    import re
+
+    text = ARCHITECTURE.read_text(encoding="utf-8")
+    diagram = text.split("```text\n", 1)[1].split("```", 1)[0]
+    shown = [(int(m[1]), m[2]) for m in re.finditer(r"^(\d+)\s+(\S+/)", diagram, re.M)]
+    expected = [(level, prefix.removeprefix("gnibench.").replace(".", "/") + "/")
+                for prefix, level in sorted(FLOORS, key=lambda f: -f[1])]
+    assert shown == expected
+    named = set(re.findall(r"`((?:suite|problems|methods|reports|tests|benchmarks|examples|docs)"
+                           r"/[\w./-]*)`", text))
+    named |= {p for _, p in shown}
+    assert named, "no paths found on the page"
+    missing = sorted(p for p in named if not (ROOT / p).exists())
+    assert not missing, f"the architecture page names paths that do not exist: {missing}"

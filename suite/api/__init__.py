@@ -15,10 +15,7 @@ from gnibench.suite.api.reproducing import reproduce
 from gnibench.suite.api.running import RunResult, run
 from gnibench.suite.api.solving import Trajectory, solve
 from gnibench.suite.api.verifying import verify
-from gnibench.suite.foundation import datastack
 from gnibench.suite.foundation.errors import UserError
-
-datastack.install()     # CPython's frame stack without mmap churn (suite/foundation/datastack.py)
 
 __all__ = ["RunResult", "Trajectory", "UserError", "list_methods", "list_metrics",
            "list_problems", "load", "report", "reproduce", "run", "solve", "verify"]

@@ -59,10 +59,9 @@ class RunResult:
 
 def read_tables(out: Path, output: Path | None) -> RunResult:
     """A results directory's tables (``samples``, ``cells``, ``timings``.parquet) in memory."""
-    import pandas as pd
-    from gnibench.suite.runs.storage import read_parquet_meta
+    from gnibench.suite.runs.storage import read_parquet, read_parquet_meta
 
-    tables = {name: pd.read_parquet(out / f"{name}.parquet")
+    tables = {name: read_parquet(out / f"{name}.parquet")
               for name in ("samples", "cells", "timings")}
     meta = read_parquet_meta(out / "cells.parquet")
     meta.pop("table", None)

@@ -1,6 +1,6 @@
 """Calling a resumable compiled driver: output buffers, work budget, progress and Ctrl-C.
 
-Every compiled driver (methods/kernels/driver.py, adaptive.py, extrapolation.py and their grid and
+Every compiled driver (methods/assembly/templates/fixed.py, adaptive.py, extrapolation.py and their grid and
 section variants) keeps its whole state in ``y_io`` and ``st`` and returns ``STATUS_BUFFER_FULL``
 (its output buffer is full) or ``STATUS_PAUSED`` (the work budget of one call is spent) to be
 called again; :func:`run_driver` does so, with a budget tuned so that one call lasts about
@@ -34,6 +34,19 @@ def row_budget(dim: int) -> int:
 
     per_row = 8 * (1 + dim + COUNTERS)
     return max(2, min(limit("GNIBENCH_MAX_ROWS"), limit("GNIBENCH_MAX_OUTPUT_MB") * 2 ** 20 // per_row))
+
+
+def budget_reason(status: Status, buffers: Buffers, t: float) -> str:
+    """Why a run ended by the output budget (``max_rows``), with the numbers; "" otherwise."""
+    if status is not Status.MAX_ROWS:
+        return ""
+    from gnibench.suite.foundation.budgets import limit
+
+    rows = buffers.before + buffers.row
+    return (f"the output budget is full at t = {t:.17g} after {rows} rows (at most {buffers.cap} "
+            f"rows of {buffers.dim} states: GNIBENCH_MAX_ROWS={limit('GNIBENCH_MAX_ROWS')}, "
+            f"GNIBENCH_MAX_OUTPUT_MB={limit('GNIBENCH_MAX_OUTPUT_MB')}); sample less often "
+            f"(--every, --dt-out) or raise the limits")
 
 
 class Buffers:

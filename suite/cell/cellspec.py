@@ -298,6 +298,8 @@ def check_budgets(cell: CellSpec) -> None:
         return
     spacing = cell.grid_spacing if compiled and cell.transformed is None else None
     t_final = cell.t_end if cell.t_end is not None else cell.t_final
+    if cell.transformed is not None and cell.dt_out:   # a grid in the original time (K-S)
+        check_output(t_final / cell.dt_out / cell.every + 2, columns, what)
     if spacing is not None and (not cell.adaptive or cell.t_end is not None):
         check_output(t_final / spacing / cell.every + 2, columns, what)
     elif not cell.adaptive:

@@ -5,7 +5,7 @@ once by :func:`~gnibench.suite.cell.cellspec.build`) and returns a
 :class:`~gnibench.suite.cell.trajectory.Trajectory`, choosing its branch by the cell's kind
 (:class:`~gnibench.suite.cell.cellspec.CellKind`):
 
-* compiled fixed-step methods (``methods/kernels/driver.py``), and compiled adaptive methods
+* compiled fixed-step methods (``methods/assembly/templates/fixed.py``), and compiled adaptive methods
   (embedded pairs with Hairer's control, odex), sampled every K steps;
 * samples on a time grid t_k = k dt_out for every compiled method (``dt_out``: dense output or
   partial steps, :mod:`gnibench.suite.cell.timegrid`);
@@ -24,7 +24,7 @@ call lasts about ``CALL_SECONDS`` and a new output buffer whenever one is full.
 from __future__ import annotations
 
 import numpy as np
-from gnibench.suite.cell.calls import UNLIMITED, Buffers, Progress
+from gnibench.suite.cell.calls import UNLIMITED, Buffers, Progress, budget_reason
 from gnibench.suite.cell.cellspec import CellKind, CellSpec
 from gnibench.suite.cell.compiled import problem_kernel
 from gnibench.suite.cell.drivers import AdaptiveDriver, FixedStepDriver, build_trajectory, kind_of
@@ -173,7 +173,8 @@ def _compiled(problem: Bound, cell: CellSpec, progress, budget) -> Trajectory:
                                     "extra_f_per_dense_step": dense.new_stages(pair.tab)}
     if cell.reverse:
         meta["reverse"] = True
-    return drv.trajectory(buffers, status, drv.reason(status), meta, wall)
+    reason = drv.reason(status) or budget_reason(status, buffers, drv.t)
+    return drv.trajectory(buffers, status, reason, meta, wall)
 
 
 #: the branch of :func:`integrate` for each kind of cell

@@ -1,12 +1,13 @@
 """The compiled drivers as objects, one per kind: their arguments, state, calls and trajectory.
 
-Every compiled cell runs one of the resumable drivers generated into its module: the fixed-step
-loop (methods/kernels/driver.py: ``integrate``, ``integrate_grid``, ``integrate_section``) or the
-adaptive loop shared by the embedded pairs and odex (methods/kernels/adaptive.py:
-``integrate_adaptive``, ``integrate_dense``, ``adaptive_grid``, ``adaptive_section``,
-``adaptive_section_dense``). :class:`FixedStepDriver` and :class:`AdaptiveDriver` are the one
+Every compiled cell runs one of the resumable drivers of its kernel modules
+(methods/assembly/bindings.py ``DRIVERS``): the fixed-step loop (templates/fixed.py:
+``integrate``, ``integrate_grid``, ``integrate_section``) or the adaptive loop shared by the
+embedded pairs and odex (templates/adaptive.py: ``integrate_adaptive``, ``integrate_dense``,
+``adaptive_grid``, ``adaptive_section``, ``adaptive_section_dense``), each in the module of its
+output. :class:`FixedStepDriver` and :class:`AdaptiveDriver` are the one
 place where their arguments are packed, their state (``y_io``, ``st``) is laid out and read by the
-slot names of methods/kernels/slots.py, their calls are run (:func:`.calls.run_driver`: budget,
+slot names of methods/assembly/templates/slots.py, their calls are run (:func:`.calls.run_driver`: budget,
 buffers, progress, Ctrl-C) and their kernels warmed up. :func:`build_trajectory` is the one place
 a :class:`~gnibench.suite.cell.trajectory.Trajectory` is built, for every kind of cell (compiled,
 external engine, transformed problem, section crossings).
@@ -18,7 +19,8 @@ from dataclasses import replace
 from typing import ClassVar
 
 import numpy as np
-from gnibench.methods.kernels.slots import (
+from gnibench.methods.assembly.loading import compiling, record_compiled
+from gnibench.methods.assembly.templates.slots import (
     ROW_Y,
     SLOTS,
     ST_NFEV,
@@ -31,9 +33,9 @@ from gnibench.methods.kernels.slots import (
     Y_ROWS,
 )
 from gnibench.suite.cell.calls import COUNTERS, Buffers, Progress, run_driver
-from gnibench.suite.cell.codegen import compiling, record_compiled
-from gnibench.suite.cell.compiled import CompiledCell, compile_cell, problem_kernel
+from gnibench.suite.cell.compiled import CompiledCell, compile_cell, forget_damaged, problem_kernel
 from gnibench.suite.cell.trajectory import Trajectory
+from gnibench.suite.foundation.cache import warn
 from gnibench.suite.foundation.params import Bound
 from gnibench.suite.foundation.provenance import versions
 from gnibench.suite.foundation.status import Status
@@ -50,7 +52,8 @@ def build_trajectory(problem: Bound, method, t, y, counters, status: Status, rea
     t = np.ascontiguousarray(t, dtype=np.float64)
     y = np.ascontiguousarray(y, dtype=np.float64).reshape(len(t), rec.dim)
     c = np.asarray(counters, dtype=np.float64)
-    c = c.reshape(len(t), -1) if len(t) else np.zeros((0, 4))     # no sample: no counters
+    c = c.reshape(len(t), -1) if len(t) else np.zeros((0, max(c.shape[-1] if c.ndim == 2 else 0,
+                                                               COUNTERS - 1)))   # no rows at all
     steps = c[:, 0].astype(np.int64) if np.isfinite(c[:, 0]).all() else c[:, 0].copy()
     return Trajectory(
         problem=problem.text(), method=method.text(), state_names=rec.state, t=t, y=y,
@@ -76,7 +79,7 @@ class Driver:
                  cell: CompiledCell | None = None):
         self.problem, self.method, self.name = problem, method, name
         self.cell = cell if cell is not None else ready_cell(problem, method, name)
-        self.fn = getattr(self.cell.kernel, name)
+        self.fn = self.cell.driver(name)
         self.every, self.dt_out, self.n_out = int(every), float(dt_out), int(n_out)
         self.y_io = np.zeros((Y_ROWS, problem.record.dim))
         self.y_io[ROW_Y] = self.cell.y0
@@ -84,7 +87,7 @@ class Driver:
         self.st[ST_TCOMP] = tcomp
         self.st[ST_WANTED] = wanted
 
-    # -- the state, by slot name (methods/kernels/slots.py) --------------------------------------
+    # -- the state, by slot name (methods/assembly/templates/slots.py) ---------------------------
     def slot(self, name: str) -> float:
         return float(self.st[SLOTS[name]])
 
@@ -252,9 +255,25 @@ def ready_cell(problem: Bound, method, name: str | None = None) -> CompiledCell:
                               and kind is AdaptiveDriver else "samples"]
     t0 = time.perf_counter()
     with compiling():
-        cell = compile_cell(problem, method)
-        if name not in cell.warm:
-            kind.scratch(problem, method, name, cell).warm_up()
-            cell.warm.add(name)
-            record_compiled(cell.kernel, cell.problem_kernel)
+        try:
+            cell = _warm(kind, problem, method, name)
+        except OSError:                 # a full disk, say: not a damaged cache entry
+            raise
+        except Exception as e:
+            # numba's cache files verified by their manifest may still fail to load (rewritten
+            # together with it): discarded and compiled afresh, once; any other failure is raised
+            if not forget_damaged(problem, method):
+                raise
+            warn(f"compiled kernels of {problem.id} x {method.id} could not be loaded from the "
+                 f"kernel cache ({type(e).__name__}); discarded and recompiled")
+            cell = _warm(kind, problem, method, name)
     return replace(cell, compile_seconds=time.perf_counter() - t0)
+
+
+def _warm(kind, problem: Bound, method, name: str) -> CompiledCell:
+    cell = compile_cell(problem, method)
+    if name not in cell.warm:
+        kind.scratch(problem, method, name, cell).warm_up()
+        cell.warm.add(name)
+        record_compiled(*cell.loaded())
+    return cell

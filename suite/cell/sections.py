@@ -5,7 +5,7 @@ Design
 1. *Inside the compiled driver.* Compiled cells run a section variant of their own driver
    (``integrate_section`` for fixed steps, ``adaptive_section`` / ``adaptive_section_dense`` for
    the embedded pairs and odex; the same templates with a literal flag renamed,
-   methods/kernels/driver.py, adaptive.py, extrapolation.py). After each accepted step (after the
+   methods/assembly/templates/fixed.py, adaptive.py, extrapolation.py). After each accepted step (after the
    step modifiers and the problem's ``post_step``) the driver looks for a crossing, locates it,
    and writes one row (t, y and the cumulative counters steps, nfev, njev, rejected of that step)
    to its output buffer; it stops with ``ok`` after K crossings, and is resumable like every
@@ -17,7 +17,7 @@ Design
    g(y_n) < 0 <= g(y_n+1) (a sample exactly on the section belongs to the interval that ends there;
    the initial point, often on the section, is never a crossing).
 3. *Location.* The crossing of the numerical solution is located by one of two locators, recorded
-   in ``meta.locator`` (methods/kernels/events.py, methods/events.py):
+   in ``meta.locator`` (methods/assembly/templates/events.py, methods/assembly/sections.py):
 
    * ``dense`` -- where the method has a continuous extension and the accepted points are its
      endpoints (dopri5, dop853 in adaptive mode, without a step modifier such as +projection and on
@@ -63,7 +63,7 @@ Gamma_k), the section coordinates, the remaining state components, and ``err_<in
 from __future__ import annotations
 
 import numpy as np
-from gnibench.methods.events import HENON_MAX_SUBSTEPS, HENON_RTOL
+from gnibench.methods.assembly.sections import HENON_MAX_SUBSTEPS, HENON_RTOL
 from gnibench.suite.cell.calls import Buffers
 from gnibench.suite.cell.compiled import dense_output_refusal, problem_kernel
 from gnibench.suite.cell.drivers import AdaptiveDriver, FixedStepDriver, build_trajectory, kind_of

@@ -15,7 +15,7 @@ Rules (one set for every compiled method, and for the method option ``dt_out`` o
   t_n) for fixed-step methods, the pair's own step of that size for the embedded pairs, odex's step
   with the lines of the accepted step, each followed by the step modifiers and ``post_step`` as
   every step is. Their f-evaluations are counted in ``nfev``. When t_k coincides with t_n+1 to
-  GRID_ULPS ulps, the sample is y_n+1 itself (methods/kernels/events.py).
+  GRID_ULPS ulps, the sample is y_n+1 itself (methods/assembly/templates/events.py).
 * Transformed problems (K-S, [B] (5.4)) are integrated in the fictitious time s; the grid is in the
   physical time t, a state component of the transformed system (``Transform.time``). t_k is located
   by the secant method on the partial step size sigma (or by Newton on the continuous extension)

@@ -14,11 +14,14 @@ import os
 import signal
 import sys
 
+from gnibench.suite.foundation.guard import signal_received
+
 _received: list[int] = []
 
 
 def _early(signum, frame):
     _received.append(signum)
+    signal_received()
     raise KeyboardInterrupt
 
 

@@ -14,6 +14,7 @@ from gnibench.suite.foundation.budgets import check_limits
 from gnibench.suite.foundation.errors import UserError
 from gnibench.suite.foundation.numbers import option, parse_float
 from gnibench.suite.foundation.outputs import check_output_dir, check_output_file, fault
+from gnibench.suite.foundation.status import Status
 
 
 class _Once(argparse.Action):
@@ -187,8 +188,10 @@ def _solve(a) -> int:
     from gnibench.suite.cli import streams
     from gnibench.suite.runs.progress import SolveProgress
     from gnibench.suite.runs.solving import solve_cell_spec, solve_output
-    from gnibench.suite.runs.storage import write_columns
+    from gnibench.suite.runs.writers import write_columns
 
+    if a.output is not None and str(a.output) in ("-", "/dev/stdout"):
+        a.output = None                   # stdout named as a file: written to stdout
     if a.format == "parquet" and a.output is None:
         raise UserError("--format parquet needs -o FILE (binary output is not written to stdout)")
     if a.output is not None:
@@ -213,9 +216,11 @@ def _solve(a) -> int:
         raise out.interrupted
     for name, why in out.skipped.items():
         print(f"gnibench: metric {name} does not apply: {why}", file=sys.stderr)
-    if out.traj.reason:
-        print(f"gnibench: {out.traj.status}: {out.traj.reason}", file=sys.stderr)
-    return 0
+    status = out.traj.status
+    if out.traj.reason or status.kind == "failure":
+        print(f"gnibench: {status}: {out.traj.reason or status.doc}", file=sys.stderr)
+    # a budget stopped the run: the output is not what was asked for (the rows so far are kept)
+    return 1 if status is Status.MAX_ROWS else 0
 
 
 def _list(a) -> int:
@@ -298,9 +303,7 @@ def main(argv=None) -> int:
     """The command line; returns the exit code: 0, 1 (a verdict or comparison that failed, or a
     fault during work such as a full disk), 2 (bad input), 130/143 (SIGINT/SIGTERM)."""
     from gnibench.suite.cli import signals, streams
-    from gnibench.suite.foundation import datastack
 
-    datastack.install()             # CPython's frame stack without mmap churn (datastack.py)
     try:
         with signals.handling(), streams.tolerant():
             return _main(argv)
@@ -341,8 +344,11 @@ def _main(argv) -> int:
         print(f"gnibench: error: {_one_line(e)}", file=sys.stderr)
         return 1
     except OSError as e:                   # a fault of the environment no check could foresee
+        from gnibench.suite.foundation.cache import cache_fault
+
         where = f" ({e.filename})" if getattr(e, "filename", None) else ""
-        print(f"gnibench: error: {e.strerror or type(e).__name__}{where}", file=sys.stderr)
+        line = cache_fault(e) or f"{e.strerror or type(e).__name__}{where}"
+        print(f"gnibench: error: {line}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
         signals.quiet()

@@ -43,6 +43,8 @@ import sys
 import threading
 import time
 
+from gnibench.suite.foundation.guard import signal_received, watch_signals
+
 GRACE = 1.0                 # seconds the main thread has to raise a signal before a hard exit
 POLL = 0.02                 # how often the watchdog looks while a signal is pending
 SIGNALS = (signal.SIGINT, signal.SIGTERM)
@@ -86,6 +88,7 @@ def _unsafe(frame) -> bool:
 
 
 def _handler(signum, frame):
+    signal_received()                   # a real interrupt, not one the user's code raised
     now = time.monotonic()
     with _state.lock:
         _state.received = signum
@@ -224,6 +227,7 @@ def handling():
     _state.received, _state.raised_at, _state.pending, _state.origin = None, -1e300, None, None
     _state.stop.clear()
     previous = {s: signal.signal(s, _handler) for s in SIGNALS}
+    watch_signals(True)
     _state.previous_unraisable, sys.unraisablehook = sys.unraisablehook, _unraisable
     read_fd, write_fd = os.pipe()
     os.set_blocking(write_fd, False)
@@ -244,6 +248,7 @@ def handling():
         signal.set_wakeup_fd(old_wakeup)
         for s, h in previous.items():
             signal.signal(s, h if h is not None else signal.SIG_DFL)
+        watch_signals(False)
         _state.fds = None
         os.close(write_fd)                     # the watchdog reads EOF, ends, closes read_fd
         watcher.join(timeout=5)

@@ -42,14 +42,10 @@ def limit(name: str) -> int:
 def check_limits() -> None:
     """Refuse, before any work, a budget variable that is set but not a number, and a bad value
     of a numba setting gnibench depends on (:mod:`gnibench.suite.foundation.numba_settings`:
-    NUMBA_DISABLE_JIT=1 would make every cell end in error), and of ``GNIBENCH_FRAME_CACHE``
-    (:mod:`gnibench.suite.foundation.datastack`)."""
-    from gnibench.suite.foundation.datastack import check_setting
-
+    NUMBA_DISABLE_JIT=1 would make every cell end in error)."""
     for name in _DEFAULTS:
         limit(name)
     check_numba_settings()
-    check_setting()
 
 
 def check_count(value: float, what: str, budget: str, unit: str) -> None:

@@ -13,12 +13,15 @@ number.
 """
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
 import shutil
 import sys
 from pathlib import Path
+
+from gnibench.suite.foundation.files import NotRegularFile, read_regular
 
 
 def cache_root() -> Path:
@@ -72,8 +75,15 @@ def write_atomic(path: Path, text: str) -> None:
     """Write text to path through a process-unique temporary file and an atomic rename, so that
     concurrent writers (pytest-xdist, Dask workers) never expose a partial file."""
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_text(text)
-    _replace(tmp, path)
+    try:
+        tmp.write_text(text)
+        _replace(tmp, path)
+    except OSError as e:              # a full disk, say: the error names the file
+        if not e.filename:
+            e.filename = str(path)
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+        raise
 
 
 def _replace(tmp: Path, path: Path) -> None:
@@ -101,6 +111,26 @@ def atomic_write(path: Path, write) -> None:
     finally:
         if tmp.exists():
             tmp.unlink()
+
+
+def cache_fault(e: OSError) -> str:
+    """The line for an OSError met writing the cache (a full disk, a quota, a read-only mount):
+    which cache, what happened and what to do; "" for an error elsewhere."""
+    import errno
+
+    name = getattr(e, "filename", None)
+    root = Path(os.environ.get("GNIBENCH_CACHE_DIR") or Path.home() / ".cache" / "gnibench")
+    try:
+        inside = name is not None and Path(name).resolve().is_relative_to(root.resolve())
+    except (OSError, ValueError):
+        inside = False
+    if not inside:
+        return ""
+    full = e.errno in (errno.ENOSPC, errno.EDQUOT)
+    remedy = ("free room on its disk, or point GNIBENCH_CACHE_DIR at a disk with room" if full
+              else "make it writable, or point GNIBENCH_CACHE_DIR at a directory that is")
+    return (f"the kernel cache {root} cannot be written ({e.strerror or type(e).__name__}: "
+            f"{name}); {remedy}; nothing finished was lost, run the command again")
 
 
 def warn(message: str) -> None:
@@ -137,8 +167,12 @@ def read_checked(path: Path, what: str, parse=None):
     if not path.exists() and not path.is_symlink():
         return None
     try:
-        raw = path.read_bytes()
-        expected = _sum_path(path).read_text().strip()
+        raw = read_regular(path)
+        expected = read_regular(_sum_path(path)).decode().strip()
+    except NotRegularFile as e:              # a FIFO, socket or directory in its place
+        warn(f"cached {what} {path.name} {e.what}; discarded and rebuilt")
+        discard(path)
+        return None
     except (OSError, UnicodeDecodeError):
         expected, raw = None, b""
     if expected != digest(raw):
@@ -202,11 +236,12 @@ def verify_numba_files(module_path: Path) -> None:
         if d.is_symlink() or d.exists() and not d.is_dir():
             warn(f"cache entry {d} is not a directory; removed")
             discard(d)
+    _drop_irregular(module_path)
     files = _numba_files(module_path)
     if not files:
         return
     try:
-        listed = json.loads(_manifest(module_path).read_text())
+        listed = json.loads(read_regular(_manifest(module_path)))
         if not isinstance(listed, dict):
             raise TypeError("not a manifest")
     except (OSError, ValueError, TypeError):
@@ -224,10 +259,35 @@ def verify_numba_files(module_path: Path) -> None:
             discard(f)
 
 
+def _drop_irregular(module_path: Path) -> None:
+    """Remove, with one warning line, whatever is not a regular file among the module's files in
+    its ``__pycache__`` (Python's ``.pyc`` too, which Python's import reads without our opener:
+    a FIFO there blocked the import for ever) and numba's cache directory."""
+    for d in dict.fromkeys((module_path.parent / "__pycache__", numba_cache_path(module_path))):
+        if not d.is_dir():
+            continue
+        for f in d.glob(f"{module_path.stem}.*"):
+            if not f.is_symlink() and f.is_file():
+                continue
+            warn(f"cache entry {f} is not a regular file; removed")
+            discard(f)
+
+
+def discard_numba_files(module_path: Path) -> bool:
+    """Remove every numba cache file of a generated module and its manifest (numba recompiles on
+    the next import); True if there was any."""
+    module_path = Path(module_path)
+    files = _numba_files(module_path)
+    for f in files:
+        discard(f)
+    discard(_manifest(module_path))
+    return bool(files)
+
+
 def _file_digest(path: Path) -> str | None:
     try:
-        return digest(path.read_bytes())
-    except OSError:                       # a directory in place of a file: not what was listed
+        return digest(read_regular(path))
+    except OSError:                       # a directory or FIFO in place of a file: not listed
         return None
 
 
@@ -244,7 +304,7 @@ def record_numba_files(module_path: Path) -> None:
         return
     path = _manifest(module_path)
     try:
-        if json.loads(path.read_text()) == listed:
+        if json.loads(read_regular(path)) == listed:
             return
     except (OSError, ValueError):
         pass

@@ -59,8 +59,11 @@ def check_output_file(path: Path, option: str = "-o") -> None:
 
 def _check_file(path: Path, what: str) -> None:
     if path.is_symlink():
+        target = path.resolve()
+        hint = f"its target, {target}" if target.is_file() or not target.exists() else \
+            "a regular file; to write to stdout, leave out -o"
         raise UserError(f"bad {what}: it is a symlink (it would be replaced, not written "
-                        f"through); allowed: a regular file, e.g. {path.resolve()}")
+                        f"through); allowed: {hint}")
     try:
         mode = path.stat().st_mode
     except FileNotFoundError:

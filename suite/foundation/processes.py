@@ -11,6 +11,8 @@ from __future__ import annotations
 import contextlib
 import os
 import signal
+
+from gnibench.suite.foundation.guard import watch_signals
 import sys
 
 PR_SET_PDEATHSIG = 1
@@ -34,6 +36,7 @@ def quiet_worker(parent: int) -> None:
     with its parent."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    watch_signals()        # no real KeyboardInterrupt here: one raised is the user's code's
     die_with_parent(parent)
 
 

@@ -13,9 +13,9 @@ from __future__ import annotations
 import os
 import stat
 import tomllib
-from pathlib import Path
 
 from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.files import read_regular
 
 MAX_CHARS = 4_000_000
 MAX_NESTING = 24          # brackets of arrays and inline tables, counted in the text
@@ -78,8 +78,10 @@ def read_text_file(path, what: str) -> str:
         raise UserError(f"{what} {name!r} is {info.st_size} bytes; allowed: a TOML file of at "
                         f"most {MAX_CHARS} characters")
     try:
-        raw = Path(path).read_bytes()
-        return raw.decode("utf-8")
+        raw = read_regular(path)            # opened without blocking, checked again as read
+        # a byte-order mark (some Windows editors write one) is not part of the text: TOML's
+        # parser would stop at it with "Invalid statement (at line 1, column 1)"
+        return raw.decode("utf-8").removeprefix("\ufeff")
     except UnicodeDecodeError as e:
         raise UserError(f"{what} {name!r} is not UTF-8 text (byte {e.start}); allowed: a TOML "
                         f"file in UTF-8") from None
@@ -96,6 +98,7 @@ def load_toml(text: str, source: str) -> dict:
     if depth > MAX_NESTING:
         raise UserError(f"{source}: arrays or tables nested {depth} deep; allowed: at most "
                         f"{MAX_NESTING} levels")
+    text = text.removeprefix("\ufeff")
     try:
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:

@@ -2,7 +2,7 @@
 independently ([B] §6.2: "Position of points on the section was determined with precision higher
 than 10⁻¹⁵").
 
-Hénon's trick (suite/cell/sections.py, methods/events.py) lands on the section {g = 0} by taking g
+Hénon's trick (suite/cell/sections.py, methods/assembly/sections.py) lands on the section {g = 0} by taking g
 itself as the independent variable, so g at the located point is zero to round-off whatever the
 accuracy of the rest of the point (|p₁| at the G-S points measures nothing). The located point y*
 is meant to be where the exact flow of the field the method integrates, started from the accepted

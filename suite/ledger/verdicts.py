@@ -29,6 +29,7 @@ from gnibench.suite.foundation import expressions
 from gnibench.suite.ledger import closed_forms, identities, misses
 from gnibench.suite.ledger.entries import Claim
 from gnibench.suite.ledger.reach import NotMeasured, Run, at_sample, require_complete, runs_of
+from gnibench.suite.runs.storage import read_parquet
 
 SKIPPED, ERROR, NOT_MEASURED = "skipped", "error", "not measured"
 #: a closed form with more named values than this (the §6 statistics of several cells give 100+)
@@ -122,8 +123,8 @@ class Results:
             d = self.dirs.get(experiment)
             if d is None or not (d / "cells.parquet").is_file():
                 return None
-            self._tables[experiment] = (pd.read_parquet(d / "cells.parquet"),
-                                        pd.read_parquet(d / "samples.parquet"))
+            self._tables[experiment] = (read_parquet(d / "cells.parquet"),
+                                        read_parquet(d / "samples.parquet"))
         return self._tables[experiment]
 
 

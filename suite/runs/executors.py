@@ -25,6 +25,7 @@ import signal
 from collections.abc import Callable, Iterator
 
 from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.outputs import Fault
 from gnibench.suite.runs.cellwork import CellOutcome, run_cell
 from gnibench.suite.runs.pool import default_jobs, workers  # noqa: F401 - part of this interface
 
@@ -114,6 +115,22 @@ def _environ(name: str, value: str):
         os.environ.pop(name, None)
 
 
+@contextlib.contextmanager
+def _quiet_logger(name: str):
+    """The logger ``name`` says nothing below CRITICAL for the block: while our cluster starts,
+    a worker that fails (its fork server killed, say) is Dask's ERROR log with a traceback from
+    every nanny, 158 lines for two workers; the one line is ours."""
+    import logging
+
+    logger = logging.getLogger(name)
+    level = logger.level
+    logger.setLevel(logging.CRITICAL)
+    try:
+        yield
+    finally:
+        logger.setLevel(level)
+
+
 def _dask(groups, jobs, scheduler) -> Iterator[CellOutcome]:
     from distributed import Client, LocalCluster, as_completed
 
@@ -130,10 +147,16 @@ def _dask(groups, jobs, scheduler) -> Iterator[CellOutcome]:
             # errors only (a Ctrl-C cancels their cells: Dask's warnings about that are no news;
             # the setting is read by the worker processes as they start, and then taken back, so
             # the caller's own clusters, in a notebook say, keep their logging)
-            with _environ("DASK_LOGGING__DISTRIBUTED", "critical"), _forked_workers():
-                cluster = LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True,
-                                       dashboard_address=None,
-                                       scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})
+            with _environ("DASK_LOGGING__DISTRIBUTED", "critical"), _forked_workers(), \
+                    _quiet_logger("distributed"):
+                try:
+                    cluster = LocalCluster(n_workers=jobs, threads_per_worker=1,
+                                           processes=True, dashboard_address=None,
+                                           scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})
+                except Exception as e:  # noqa: BLE001 - its workers died as it started, say
+                    cause = " ".join(str(e).split())[:160] or type(e).__name__
+                    raise Fault(f"the local Dask cluster could not start ({cause}); nothing was "
+                                f"lost: run the command again (or use --executor local)") from None
             client = Client(cluster)
         finally:
             signal.pthread_sigmask(signal.SIG_UNBLOCK, blocked)

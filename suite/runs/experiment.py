@@ -181,6 +181,15 @@ def _expand(group: Group, gi: int, defaults: ExperimentFile, where: str, first_i
     if section is not None and dt_out is not None:
         raise UserError(f"{where}: section and dt_out both given; allowed: one of them (a section "
                         "cell writes its crossings, not samples)")
+    if section is not None:
+        # every K-th sample does not apply to crossings: a group's every, or a top-level every
+        # beside the top-level section, would be dropped without a word (solve refuses --every
+        # with --section); a top-level every is left aside by a group with its own section
+        beside = group.every if group.every is not None else (
+            defaults.every if group.section is None else None)
+        if beside is not None and beside != 1:
+            raise UserError(f"{where}: section and every = {beside} both given; allowed: one of "
+                            f"them (a section cell writes every crossing)")
     reference = (defaults.reference_solution if group.reference_solution is None
                  else group.reference_solution)
     problem_vary, method_vary = _vary(group)

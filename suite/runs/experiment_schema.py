@@ -90,6 +90,10 @@ def _vary(table: dict) -> dict[str, dict[str, list[str]]]:
             if not isinstance(values, list) or not values or len(values) > MAX_ITEMS:
                 raise ValueError(f"{here}: bad value {values!r}; allowed: a non-empty list of "
                                  f"at most {MAX_ITEMS} values")
+            if option in out.get(target, {}):       # vary.h and vary.method.h: one option
+                raise ValueError(f"{here}: the option {option!r} of the {target} is varied twice "
+                                 f"(vary.{option} and vary.method.{option} name the same option); "
+                                 f"allowed: one list per option")
             out.setdefault(target, {})[option] = [value_text(v, here) for v in values]
     return out
 

@@ -81,10 +81,11 @@ def preload() -> None:
     import gnibench.suite.metrics.compute
     import gnibench.suite.runs.cellwork
     import gnibench.suite.runs.tables  # noqa: F401
-    from numba.core.registry import cpu_target
+    import numba
 
-    cpu_target.typing_context.refresh()
-    cpu_target.target_context.refresh()
+    # numba sets up its CPU target (typing and lowering registries) at its first compilation:
+    # a tiny function compiled here, through numba's public API, pays that before the fork
+    numba.njit(lambda x: x + 1.0)(1.0)
 
 
 def _serve(conn, others: list, parent: int, ready: bool = False) -> None:

@@ -5,7 +5,7 @@ line starts its progress display after it), :func:`solve_output` solves the cell
 metrics and builds the table
 (:func:`gnibench.suite.runs.tables.sample_columns`) and its metadata
 (:func:`gnibench.suite.runs.storage.provenance`). The command line writes both
-(:func:`gnibench.suite.runs.storage.write_columns`); the Python API returns them as a DataFrame and
+(:func:`gnibench.suite.runs.writers.write_columns`); the Python API returns them as a DataFrame and
 the JSON metadata as a dict (:func:`json_meta`), so the two cannot drift apart.
 """
 from __future__ import annotations
@@ -24,7 +24,7 @@ class SolveOutput:
     stopped it (None if it ran to its end) and the typed cell
     (:class:`gnibench.suite.cell.cellspec.CellSpec`). ``frame`` is the table as a DataFrame,
     made when asked: ``gnibench solve`` writes csv and json from the columns without importing
-    pandas (:func:`gnibench.suite.runs.storage.write_columns`)."""
+    pandas (:func:`gnibench.suite.runs.writers.write_columns`)."""
 
     traj: object
     metrics: object

@@ -208,13 +208,16 @@ class Store:
 
     def _load(self, key: str, path: Path) -> Part | None:
         import pandas as pd
+        import pyarrow as pa
+        from gnibench.suite.foundation.files import NotRegularFile, read_regular
         from gnibench.suite.runs.storage import read_parquet_meta
 
         try:
-            meta = read_parquet_meta(path)
+            raw = read_regular(path)          # never blocks on a FIFO (foundation/files.py)
+            meta = read_parquet_meta(pa.BufferReader(raw))
             if meta.get("key") != key or meta.get("part_format") != PART_FORMAT:
                 raise ValueError("it is not the part of this cell")
-            samples = pd.read_parquet(path) if meta["has_samples"] else None
+            samples = pd.read_parquet(pa.BufferReader(raw)) if meta["has_samples"] else None
             stored = meta.pop("checksum", None)
             if stored != content_checksum(meta, samples):
                 warn(f"stored cell {path.relative_to(self.out)} does not match its checksum "
@@ -223,6 +226,10 @@ class Store:
                 return None
             return Part(samples, _restore(meta["row"]), _restore(meta["timing"]),
                         tuple(meta["state_names"]))
+        except NotRegularFile as e:       # a FIFO or a directory in its place
+            warn(f"stored cell {path.relative_to(self.out)} {e.what}; discarded and recomputed")
+            discard(path)
+            return None
         except Exception as e:  # noqa: BLE001 - a damaged part is recomputed, whatever the damage
             why = " ".join(str(e).split())[:120] or type(e).__name__
             warn(f"stored cell {path.relative_to(self.out)} cannot be read ({why}); discarded "

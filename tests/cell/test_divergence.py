@@ -133,3 +133,20 @@ def test_a_run_that_fills_its_output_budget_ends_max_rows_with_its_samples(monke
     monkeypatch.delenv("GNIBENCH_MAX_ROWS")
     whole = solve("kepler-2d", "dopri5:rtol=1e-10,atol=1e-10", t_end=10.0)
     assert np.array_equal(whole.t[:99], capped.t[:99]) and np.array_equal(whole.y[:99], capped.y[:99])
+    assert "GNIBENCH_MAX_ROWS=100" in capped.reason and "after 100 rows" in capped.reason
+
+
+@pytest.mark.parametrize("fmt", ["csv", "json"])
+def test_solve_stopped_by_the_output_budget_says_so_and_exits_1(monkeypatch, capsys, fmt):
+    """The rows so far are written, one line on stderr names the budget, and the exit code is not
+    0: the output is not what was asked for (before: exit 0, an empty reason, no line in csv)."""
+    monkeypatch.setenv("GNIBENCH_MAX_ROWS", "50")
+    code = main(["solve", "kepler-2d", "dopri5", "--t-end", "100", "--format", fmt])
+    out, err = capsys.readouterr()
+    assert code == 1
+    assert err.startswith("gnibench: max_rows: the output budget is full at t = ")
+    assert "GNIBENCH_MAX_ROWS=50" in err and len(err.splitlines()) == 1
+    if fmt == "csv":
+        assert len(out.splitlines()) == 51
+    else:
+        assert json.loads(out)["meta"]["status"] == "max_rows"

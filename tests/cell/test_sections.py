@@ -314,3 +314,18 @@ def test_henon_where_dense_output_does_not_apply(osc, method, note):
 def test_dense_locator_refused_where_it_does_not_apply(osc):
     with pytest.raises(UserError, match="dense output does not locate"):
         solve_section(P, "rk4:h=0.01", 1, t_end=7.0, locator="dense")
+
+
+@pytest.mark.parametrize("problem, method", [("henon-heiles", "rk4:h=0.01"),
+                                             ("henon-heiles", "dop853:rtol=1e-10,atol=1e-10"),
+                                             ("euler-so4", "lie-poisson:h=0.01")])
+def test_no_crossing_at_all_is_an_empty_table(problem, method):
+    """A horizon too short for one crossing crashed in the trajectory's counters ("cannot
+    reshape array of size 0", issue 43: both Hénon-Heiles section benchmarks died in their
+    warm-up); it is an empty table, status ok, and the reason says how many were found."""
+    from gnibench.suite.runs.solving import solve_cell_spec, solve_output
+
+    out = solve_output(solve_cell_spec(problem, method, t_end=0.1, section=1))
+    assert out.traj.status == "ok" and "only 0 of 1 crossings" in out.traj.reason
+    assert len(out.traj.t) == 0 and out.traj.steps.shape == (0,)
+    assert all(len(v) == 0 for v in out.columns.values()) and "crossing" in out.columns

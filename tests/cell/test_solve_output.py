@@ -1,8 +1,10 @@
-"""``gnibench solve`` writes csv and json from the cell's columns (suite/runs/storage.py,
-``write_columns``): the same text as pandas writes from the DataFrame, without importing pandas.
+"""``gnibench solve`` writes csv and json from the cell's columns (suite/runs/writers.py,
+``write_columns``), block by block: the same text as pandas writes from the whole DataFrame,
+without importing pandas, whatever the block size.
 
-Compared byte for byte with ``write_frame`` (pandas' ``to_csv``) on cells of every kind of table
-and on columns of edge values."""
+Compared byte for byte with pandas' ``to_csv`` and ``json.dumps`` of the whole table (the oracle
+below) on cells of every kind of table and on columns of edge values, in blocks of 7 rows and in
+one block."""
 from __future__ import annotations
 
 import io
@@ -12,7 +14,10 @@ import sys
 import numpy as np
 import pytest
 from gnibench.suite.runs.solving import solve_cell_spec, solve_output
-from gnibench.suite.runs.storage import _plain, write_columns, write_frame
+import json
+import math
+
+from gnibench.suite.runs.writers import _plain, write_columns
 from gnibench.suite.runs.tables import frame_of
 
 CELLS = [
@@ -25,11 +30,23 @@ CELLS = [
 ]
 
 
+def _oracle(columns, meta, fmt) -> str:
+    """What pandas and json write for the whole table at once."""
+    df = frame_of(dict(columns))
+    if fmt == "csv":
+        return df.to_csv(index=False)
+    numbers = {c: [x if math.isfinite(x) else None
+                   for x in df[c].to_numpy(dtype=float, na_value=math.nan).tolist()]
+               for c in df.columns}
+    return json.dumps({"meta": meta, "columns": numbers}, default=str) + "\n"
+
+
 def _both(columns, meta, fmt):
-    fast, slow = io.StringIO(), io.StringIO()
+    fast, blocks = io.StringIO(), io.StringIO()
     write_columns(columns, meta, fmt, None, fast)
-    write_frame(frame_of(columns), meta, fmt, None, slow)
-    return fast.getvalue(), slow.getvalue()
+    write_columns(columns, meta, fmt, None, blocks, block=7)
+    assert blocks.getvalue() == fast.getvalue(), fmt
+    return fast.getvalue(), _oracle(columns, meta, fmt)
 
 
 @pytest.mark.parametrize("problem, method, options", CELLS)
@@ -72,3 +89,26 @@ def test_solve_command_does_not_import_pandas():
     assert proc.stderr.strip().splitlines()[-1] == "0 False"
     assert proc.stdout.splitlines()[0].startswith("t,p1,p2,q1,q2,err_H")
     assert len(proc.stdout.splitlines()) == 6
+
+
+def test_parquet_in_row_groups_reads_back_as_the_table(tmp_path):
+    import pandas as pd
+    import pyarrow.parquet as pq
+    from gnibench.suite.runs.storage import read_parquet_meta
+
+    n = 1000
+    steps = np.arange(n, dtype=float)
+    steps[::9] = np.nan
+    columns = {"t": np.linspace(0, 1, n), "q": np.sin(np.arange(n)), "steps": steps}
+    write_columns(columns, {"problem": "p"}, "parquet", tmp_path / "a.parquet", None, block=64)
+    back = pd.read_parquet(tmp_path / "a.parquet")
+    pd.testing.assert_frame_equal(back, frame_of(dict(columns)))
+    assert pq.ParquetFile(tmp_path / "a.parquet").num_row_groups == 16
+    assert read_parquet_meta(tmp_path / "a.parquet") == {"problem": "p"}
+
+
+def test_empty_tables_are_written_with_their_header():
+    columns = {"t": np.array([]), "q": np.array([]), "steps": np.array([])}
+    for fmt in ("csv", "json"):
+        fast, oracle = _both(columns, {"problem": "p"}, fmt)
+        assert fast == oracle, fmt

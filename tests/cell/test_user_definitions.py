@@ -324,3 +324,22 @@ order = 4
     with pytest.raises(UserError, match=r"^method tj4-of-sv \(a composition of stormer-verlet\): "
                                         r"it needs a partitioned system"):
         solve("euler-so4", "tj4-of-sv:h=0.01", steps=2)
+
+
+def test_an_id_longer_than_64_characters_is_refused_up_front(tmp_path):
+    """An id names cache files: 5000 characters failed later with "File name too long" naming a
+    cache path. Refused when the file is loaded, the id shortened in the message."""
+    from gnibench.suite.cell.user.loader import load
+    from gnibench.suite.foundation.errors import UserError
+
+    defs = tmp_path / "long.toml"
+    for n, ok in ((64, True), (65, False), (5000, False)):
+        defs.write_text(f'[[problem]]\nid = "{"a" * n}"\nq = ["q"]\np = ["p"]\n'
+                        f'hamiltonian = "p**2/2 + q**2/2"\ninitial = {{ q = "1", p = "0" }}\n')
+        if ok:
+            assert load(defs) == ["a" * n]
+            continue
+        with pytest.raises(UserError, match=rf"bad id 'a{{20}}'\.\.\. \({n} characters\); "
+                                            r"allowed: .*at most 64 characters") as e:
+            load(defs)
+        assert len(str(e.value)) < 300

@@ -288,28 +288,46 @@ def test_outputs_where_nothing_can_be_created_are_refused(place, capsys):
 
 
 def test_disk_full_while_writing_is_one_line_and_leaves_nothing(tmp_path, capsys, monkeypatch):
-    """ENOSPC in solve -o, simulated in the write itself (half a file, then the error)."""
+    """ENOSPC in solve -o, simulated in the write itself (part of a file, then the error)."""
+    import builtins
+
+    import pyarrow.parquet as pq
+    from gnibench.suite.runs import writers
+
     out_path = tmp_path / "x.parquet"
 
-    def full(self, path, *a, **k):
-        Path(path).write_bytes(b"PAR1 half")
-        raise OSError(errno.ENOSPC, "No space left on device")
+    class Full:
+        """A text file that takes 9 characters, then the disk is full."""
 
-    real_write_text = Path.write_text
+        def __init__(self, path, *a, **k):
+            self.f = builtins.open(path, *a, **k)
 
-    def full_text(self, text, *a, **k):       # csv and json are written from the columns
-        if Path(self).parent != tmp_path:
-            return real_write_text(self, text, *a, **k)
-        real_write_text(self, text[:9], *a, **k)
-        raise OSError(errno.ENOSPC, "No space left on device")
+        def write(self, text):
+            self.f.write(text[:9])
+            raise OSError(errno.ENOSPC, "No space left on device")
 
-    monkeypatch.setattr(Path, "write_text", full_text)
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *exc):
+            self.f.close()
+
+    monkeypatch.setattr(writers, "open", Full, raising=False)
     for fmt in ("csv", "json"):
         code, _, err = run(SOLVE + ["--format", fmt, "-o", str(tmp_path / f"x.{fmt}")], capsys)
         assert "No space left on device" in one_error_line(code, err, status=1)
-    import pyarrow.parquet as pq
 
-    monkeypatch.setattr(pq, "write_table", lambda table, path, **k: full(None, path))
+    class FullParquet:
+        def __init__(self, path, schema, **k):
+            Path(path).write_bytes(b"PAR1 half")
+
+        def write_table(self, table, **k):
+            raise OSError(errno.ENOSPC, "No space left on device")
+
+        def close(self):
+            pass
+
+    monkeypatch.setattr(pq, "ParquetWriter", FullParquet)
     code, _out, err = run(SOLVE + ["--format", "parquet", "-o", str(out_path)], capsys)
     assert "No space left on device" in one_error_line(code, err, status=1)
     assert not list(tmp_path.iterdir())          # no result, no temporary file
@@ -523,3 +541,24 @@ def test_a_run_goes_on_when_its_progress_reader_goes_away(tmp_path):
     assert p.wait(timeout=300) == 0
     assert (tmp_path / "out" / "cells.parquet").is_file()
     assert len(pd.read_parquet(tmp_path / "out" / "cells.parquet")) == 4
+
+
+@pytest.mark.parametrize("name", ["/dev/stdout", "-"])
+def test_stdout_named_as_the_output_file_is_stdout(name):
+    """``-o /dev/stdout`` (a symlink to the process's stdout, a pipe here) is stdout, as in most
+    tools (before: refused with the hint "a regular file, e.g. /proc/<pid>/fd/pipe:[...]")."""
+    done = subprocess.run([GNIBENCH, *SOLVE, "-o", name], capture_output=True, text=True,
+                          check=False)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.splitlines()[0].startswith("t,") and len(done.stdout.splitlines()) == 22
+
+
+def test_a_symlink_output_gets_a_hint_that_helps(tmp_path, capsys):
+    link = tmp_path / "link"
+    link.symlink_to("/dev/null")
+    line = one_error_line(*run([*SOLVE, "-o", str(link)], capsys)[::2])
+    assert "to write to stdout, leave out -o" in line and "/proc/" not in line
+    other = tmp_path / "other"
+    other.symlink_to(tmp_path / "real.csv")
+    line = one_error_line(*run([*SOLVE, "-o", str(other)], capsys)[::2])
+    assert f"allowed: its target, {tmp_path / 'real.csv'}" in line

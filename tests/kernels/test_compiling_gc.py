@@ -1,5 +1,5 @@
 """While a cell compiles, the objects alive before are frozen for the cyclic garbage collector and
-unfrozen after (suite/cell/codegen.py ``compiling``); a process its owner froze before gnibench
+unfrozen after (methods/assembly/loading.py ``compiling``); a process its owner froze before gnibench
 first compiled in it is left frozen. Run in fresh interpreters: the test processes are frozen by
 tests/conftest.py."""
 from __future__ import annotations
@@ -11,7 +11,7 @@ import pytest
 
 PROBE = """
 import gc
-from gnibench.suite.cell.codegen import compiling
+from gnibench.methods.assembly.loading import compiling
 {before}
 outside = gc.get_freeze_count()
 with compiling():

@@ -1,4 +1,4 @@
-"""Dense output of dopri5 and dop853 (methods/dense_output.py, methods/kernels/adaptive.py).
+"""Dense output of dopri5 and dop853 (methods/dense_output.py, methods/assembly/templates/adaptive.py).
 
 Measured (kepler-2d, e = 0.2, one step from the apocentre, error at θ = 0.3 and 0.7 against
 Kepler's equation; least-squares slope over the errors above 1e-13): the interpolant's local error
@@ -16,11 +16,11 @@ import numpy as np
 import pandas as pd
 import pytest
 from gnibench.methods import order_conditions as oc
-from gnibench.methods.dense_output import _quotients
+from gnibench.methods.assembly.steps.dense import _quotients
 from gnibench.methods.embedded_rk import DOP853, DOPRI5
 from gnibench.methods.high_order_rk import VERN6, VERN7, VERN8, VERN9
 from gnibench.suite.cell.calls import Buffers
-from gnibench.suite.cell.codegen import load
+from gnibench.methods.assembly import assemble
 from gnibench.suite.cell.compiled import dense_output_refusal
 from gnibench.suite.cell.drivers import AdaptiveDriver
 from gnibench.suite.cell.solve import solve
@@ -82,7 +82,7 @@ def test_endpoints(kepler, method):
     """u(0) = y0 exactly, u(1) = y1 and u'(0) = h f(y0), u'(1) = h f(y1) to round-off (the
     slope's round-off grows with the size w of the weights: Verner's reach 7e5 for Vern8)."""
     prob, par, y0 = kepler
-    mod, _, _ = load(prob, parse_method(method, prob))
+    mod = assemble(prob, parse_method(method, prob))
     h = 0.05
     pair = PAIRS[method]
     w = max(1.0, max((sum(abs(float(q[k])) for q in _quotients(pair.dense, pair.tab))
@@ -108,7 +108,7 @@ def _interior_slope(kepler, method: str, h0: float) -> tuple[float, int]:
     """The log-log slope of the compiled u(θ)'s local error at θ = 0.3, 0.7 against the exact
     flow, over 8 halvings of h from h0; and the extension's declared order q."""
     prob, par, y0 = kepler
-    mod, _, _ = load(prob, parse_method(method, prob))
+    mod = assemble(prob, parse_method(method, prob))
     hs = h0 / 2.0 ** np.arange(8)
     errs = []
     for h in hs:

@@ -1,6 +1,6 @@
 """The stage equations of the implicit Runge-Kutta methods are solved to round-off, by Newton's
 method (the default) and by fixed-point iteration (``fixed_point=N``): both stop on the rule of
-``methods/kernels/newton.py`` (an increment at a few ε of the state's size).
+``methods/assembly/templates/newton.py`` (an increment at a few ε of the state's size).
 
 * Linear test: for y' = L y the s-stage Gauss method is y_{n+1} = R(hL) y_n with R the (s, s) Padé
   approximant of exp (Hairer-Wanner, *Solving ODEs II*, Thm IV.3.10 and IV.5.2): (1 + z/2)/(1 - z/2)

@@ -20,8 +20,9 @@ def test_the_catalog_applies_and_covers_the_asked_categories():
     problems = [p for p in (M.check(m) for m in catalog) if p]
     assert not problems, problems
     files = {m.file for m in catalog}
-    for needed in ("methods/modifiers.py", "methods/kernels/newton.py", "methods/kernels/driver.py",
-                   "methods/dense_output.py", "methods/partitioned.py", "problems/kepler_ks.py",
+    for needed in ("methods/assembly/steps/modifiers.py", "methods/assembly/templates/newton.py",
+                   "methods/assembly/templates/fixed.py", "methods/assembly/steps/dense.py",
+                   "methods/assembly/steps/partitioned.py", "problems/kepler_ks.py",
                    "suite/cell/reference.py", "suite/metrics/position_in_orbit.py"):
         assert needed in files, needed
     for m in catalog:
@@ -30,11 +31,11 @@ def test_the_catalog_applies_and_covers_the_asked_categories():
 
 def test_a_snippet_must_occur_exactly_once(tmp_path):
     copy = M.copy_package(tmp_path)
-    twice = M.Mutant("x", "methods/kernels/newton.py", "dnorm", "dnorm2", "d", "p")
+    twice = M.Mutant("x", "methods/assembly/templates/newton.py", "dnorm", "dnorm2", "d", "p")
     assert "occurs" in M.check(twice, copy)
     with pytest.raises(UserError, match="refusing"):
         M.apply(twice, copy)
-    missing = M.Mutant("y", "methods/kernels/newton.py", "no such text", "z", "d", "p")
+    missing = M.Mutant("y", "methods/assembly/templates/newton.py", "no such text", "z", "d", "p")
     assert "occurs 0 times" in M.check(missing, copy)
 
 
@@ -59,7 +60,7 @@ def test_compensated_twins_are_mutated_with_their_plain_step():
     """Every mutant of a generator that writes a plain step and a ``step_sum`` twin hits both
     (sum=compensated cells run the twin): the partitioned blocks and Störmer-Verlet's halves."""
     catalog, _ = M.load_catalog()
-    twins = {m.id: m for m in catalog if m.file == "methods/partitioned.py"}
+    twins = {m.id: m for m in catalog if m.file == "methods/assembly/steps/partitioned.py"}
     assert twins and all(len(m.edits()) == 2 for m in twins.values()), list(twins)
     assert all("_sum" in m.more[0][0] or "f(y, par)" in m.more[0][1] for m in twins.values())
 
@@ -95,10 +96,10 @@ def test_held_out_mutants_from_a_file(tmp_path, capsys):
     refused."""
     from gnibench.suite.cli.main import main
 
-    good = ('[[mutant]]\nid = "h"\nfile = "methods/kernels/newton.py"\noriginal = "x"\n'
+    good = ('[[mutant]]\nid = "h"\nfile = "methods/assembly/templates/newton.py"\noriginal = "x"\n'
             'replacement = "y"\ndescription = "d"\nplausible = "p"\n')
     (m,), _ = M.load_catalog(good, "held.toml")
-    assert m.id == "h" and m.file == "methods/kernels/newton.py"
+    assert m.id == "h" and m.file == "methods/assembly/templates/newton.py"
     for text, why in [(good.replace('plausible = "p"\n', ""), "missing ['plausible']"),
                       (good + 'severity = 3\n', "unknown keys ['severity']"),
                       ("[[mutant]\n", "not valid TOML"),

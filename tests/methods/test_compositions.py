@@ -52,7 +52,7 @@ def _stages(mid: str) -> list[tuple[float, float]]:
 def test_every_composition_of_a_problem_shares_one_kernel(summation, modifier):
     """The coefficients are read from par (Method.runtime_data: the stage count, then a_i, b_i
     of each stage), after the modifiers' values, at the place the step reads them."""
-    from gnibench.suite.cell.codegen import module_source
+    from gnibench.methods.assembly import kernel_text
     from gnibench.suite.cell.compiled import compile_cell, kernel_key
     from gnibench.suite.cell.spec import prepare
 
@@ -64,7 +64,7 @@ def test_every_composition_of_a_problem_shares_one_kernel(summation, modifier):
         par = list(compile_cell(problem, cfg).par)
         assert par[-len(expected):] == expected, mid
         at = len(par) - len(expected)
-        assert f"stages = int(par[{at}])" in module_source(problem, cfg)[0]
+        assert f"stages = int(par[{at}])" in kernel_text(problem, cfg)
     assert len(keys) == 1
 
 

@@ -174,12 +174,12 @@ def test_work_precision_report_shows_the_solvers(tmp_path):
 
 
 def test_scipy_refusals_and_warnings_are_kept():
-    """A first step beyond the horizon is a UserError (solve_ivp raises a ValueError); scipy's
-    warnings (an rtol it raises to 100 eps) go to the engine's meta, not lost."""
+    """A first step beyond the horizon is a UserError (solve_ivp raises a ValueError); an rtol
+    that solve_ivp would raise to 100 eps (with a warning) is refused before any work."""
     with pytest.raises(UserError, match="first_step=100"):
         solve("kepler-2d", "scipy-rk45:first_step=100", t_end=1.0)
-    traj = solve("kepler-2d", "scipy-rk45:rtol=1e-16", t_end=1.0)
-    assert any("rtol" in w for w in traj.provenance["engine"]["warnings"])
+    with pytest.raises(UserError, match="rtol='1e-16'; allowed: 2.22045e-14 <= rtol"):
+        solve("kepler-2d", "scipy-rk45:rtol=1e-16", t_end=1.0)
 
 
 def test_ctrl_c_keeps_the_samples_so_far(monkeypatch):
@@ -208,3 +208,17 @@ def test_ctrl_c_keeps_the_samples_so_far(monkeypatch):
     part = e.value.partial
     assert part.status is Status.INTERRUPTED and 10 < len(part.t) and part.t[-1] < 10 * PERIOD
     assert np.all(np.isfinite(part.y)) and part.nfev[-1] < 300
+
+
+@pytest.mark.parametrize("name", SOLVERS)
+def test_a_tolerance_scipy_would_raise_is_refused(name):
+    """solve_ivp raises rtol below 100 eps to 100 eps with a warning: the table would record a
+    tolerance never used (scipy-radau:rtol=1e-30 was ``ok`` with rtol=1e-30 in its spec)."""
+    eps100 = float(100 * np.finfo(float).eps)
+    with pytest.raises(UserError, match=rf"scipy-{name}: bad value rtol='1e-30'; allowed: "):
+        prepare("harmonic-oscillator", f"scipy-{name}:rtol=1e-30")
+    with pytest.raises(UserError):
+        prepare("harmonic-oscillator", f"scipy-{name}:rtol={eps100 * 0.999!r}")
+    traj = solve("harmonic-oscillator", f"scipy-{name}:rtol={eps100!r},atol=1e-12", t_end=0.01)
+    assert traj.status is Status.OK and "warnings" not in traj.provenance["engine"], \
+        traj.provenance["engine"].get("warnings")

@@ -19,7 +19,8 @@ import math
 import numpy as np
 import pytest
 from gnibench.problems import REGISTRY
-from gnibench.suite.cell.codegen import load
+from gnibench.methods.assembly import assemble
+from gnibench.problems.codegen import problem_meta
 from gnibench.suite.cell.spec import parse_method, parse_problem
 from scipy.integrate import solve_ivp
 from support import FULL
@@ -57,7 +58,7 @@ def _exact_cases():
 def compiled(spec: str):
     """(module, problem Bound, par array) of the problem's generated code."""
     prob = parse_problem(spec)
-    mod, meta, _ = load(prob, parse_method("euler", prob))
+    mod, meta = assemble(prob, parse_method("euler", prob)), problem_meta(prob.record)
     return mod, prob, np.array(prob.record.par(prob.values), dtype=np.float64), meta
 
 

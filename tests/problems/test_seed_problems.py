@@ -10,7 +10,9 @@ import math
 
 import numpy as np
 import pytest
-from gnibench.suite.cell import codegen, spec
+from gnibench.methods.assembly import assemble
+from gnibench.problems.codegen import problem_meta
+from gnibench.suite.cell import spec
 from gnibench.suite.cell.solve import solve
 from gnibench.suite.foundation.errors import UserError
 from gnibench.suite.metrics.global_error import global_errors
@@ -29,7 +31,8 @@ SPAN = {"kepler-radial": 20.0, "kepler-3d": 3.0, "outer-solar-system": 5000.0, "
 def compiled(problem_text: str):
     """(bound problem, compiled module, par array, integral names) of a problem spec."""
     problem = spec.parse_problem(problem_text)
-    mod, meta, _ = codegen.load(problem, spec.parse_method("rk4", problem))
+    mod = assemble(problem, spec.parse_method("rk4", problem))
+    meta = problem_meta(problem.record)
     par = np.array(problem.record.par(problem.values), dtype=np.float64)
     return problem, mod, par, tuple(meta["integrals"])
 

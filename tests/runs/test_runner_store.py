@@ -126,6 +126,29 @@ def test_a_damaged_part_is_recomputed(tmp_path, capsys):
     assert _tables(out) == first
 
 
+def test_a_fifo_in_place_of_a_part_is_recomputed_not_waited_on(tmp_path):
+    """A FIFO where a stored part was: reading it would wait for a writer forever. The rerun (in
+    a process of its own, so that a hang fails the test by its timeout) recomputes that cell."""
+    import os
+    import subprocess
+    import sys
+
+    exp = _write(tmp_path, TINY, "tiny")
+    out = tmp_path / "out"
+    command = [sys.executable, "-m", "gnibench.suite.cli.entry", "run", str(exp), "-o", str(out),
+               "-j", "1", "--no-report"]
+    assert subprocess.run(command, capture_output=True, timeout=600, check=False).returncode == 0
+    first = _tables(out)
+    part = sorted((out / "parts").glob("*.parquet"))[3]
+    part.unlink()
+    os.mkfifo(part)
+    again = subprocess.run(command, capture_output=True, text=True, timeout=240, check=False)
+    assert again.returncode == 0, again.stderr
+    assert "(7 reused from the store, 1 to compute)" in again.stderr
+    assert "is a FIFO, not a regular file" in again.stderr
+    assert _tables(out) == first and not part.is_fifo()
+
+
 def test_lock_keeps_a_second_run_off(tmp_path, capsys):
     exp = _write(tmp_path, TINY, "tiny")
     out = tmp_path / "out"

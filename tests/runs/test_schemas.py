@@ -121,3 +121,49 @@ def test_claim_value_at_is_checked():
               'passes = "a > 0"\n')
     with pytest.raises(UserError, match=r"claim B-9-a: values.a: bad at = 'steps=1e999'"):
         parse_claims(f"[[claim]]\n{body}", "x.toml")
+
+
+SECTION_HEAD = 'name = "s"\ntitle = "s"\nreference = "none"\nt_end = 50.0\n'
+SECTION_GROUP = '[[cells]]\nproblems = ["henon-heiles"]\nmethods = ["rk4:h=0.1"]\n'
+
+
+@pytest.mark.parametrize("text, refused", [
+    (SECTION_HEAD + "section = 2\nevery = 3\n" + SECTION_GROUP, True),
+    (SECTION_HEAD + SECTION_GROUP + "section = 2\nevery = 3\n", True),
+    (SECTION_HEAD + "section = 2\n" + SECTION_GROUP + "every = 3\n", True),
+    (SECTION_HEAD + "every = 3\n" + SECTION_GROUP + "section = 2\n", False),   # top's default
+    (SECTION_HEAD + SECTION_GROUP + "section = 2\nevery = 1\n", False),
+])
+def test_every_beside_a_section_is_refused(text, refused):
+    """A section cell writes every crossing: an ``every`` beside its ``section`` was dropped
+    without a word (``gnibench solve --every 3 --section 2`` is refused); a top-level every is the
+    default of the other groups, left aside by a group with its own section."""
+    from gnibench.suite.runs.experiment import parse_experiment
+
+    if refused:
+        with pytest.raises(UserError, match="section and every = 3 both given"):
+            parse_experiment(text, "s.toml")
+    else:
+        cells = parse_experiment(text, "s.toml").cells
+        assert len(cells) == 1 and cells[0].section == 2
+
+
+def test_an_option_varied_twice_is_refused_not_dropped():
+    """vary.h and vary.method.h name the same option: before, one list silently won (one cell of
+    h = 0.3 instead of the product)."""
+    text = ('name = "v"\ntitle = "t"\nreference = "r"\nsteps = 10\n[[cells]]\n'
+            'problems = ["kepler-2d"]\nmethods = ["rk4"]\nvary.h = [0.1, 0.2]\nvary.method.h = [0.3]\n')
+    with pytest.raises(UserError, match=r"vary.method.h: the option 'h' of the method is varied "
+                                        r"twice"):
+        parse_experiment(text, "v.toml", "paper")
+
+
+def test_a_byte_order_mark_is_not_part_of_the_file(tmp_path, capsys):
+    """A UTF-8 BOM at the start (some Windows editors write one) read as "Invalid statement (at
+    line 1, column 1)"; the file is read without it."""
+    exp = tmp_path / "bom.toml"
+    exp.write_bytes(b"\xef\xbb\xbf" + ('name = "bom"\ntitle = "t"\nreference = "r"\nsteps = 4\n'
+                                       '[[cells]]\nproblems = ["kepler-2d"]\nmethods = ["rk4:h=0.1"]\n'
+                                       ).encode())
+    assert main(["run", str(exp), "-o", str(tmp_path / "out"), "-j", "1", "--no-report"]) == 0
+    assert "1 cells" in capsys.readouterr().err

@@ -12,6 +12,9 @@ from gnibench.suite.cell.user.expressions import ExpressionError, number, parse
 from gnibench.suite.foundation.errors import UserError
 
 ID = re.compile(r"^[A-Za-z][A-Za-z0-9_-]*$")
+#: the longest id a definition may have (an id names cache files: a file name has at most 255
+#: bytes, and the cache adds a digest and a suffix to it)
+MAX_ID = 64
 NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
 
 
@@ -30,7 +33,8 @@ class Entry:
         return value if isinstance(value, str) else "?"
 
     def where(self, key: str | None = None) -> str:
-        at = f"{self.source}: [[{self.kind}]] {self.index} (id {self.id!r})"
+        rid = self.id if len(self.id) <= MAX_ID else self.id[:20] + "..."
+        at = f"{self.source}: [[{self.kind}]] {self.index} (id {rid!r})"
         return at + (f", key {key!r}" if key else "")
 
     def error(self, key: str | None, message: str) -> UserError:
@@ -51,9 +55,11 @@ class Entry:
 
     def ident(self) -> str:
         value = self.table.get("id")
-        if not isinstance(value, str) or not ID.match(value):
-            raise self.error("id", f"bad id {value!r}; allowed: a letter, then letters, digits, "
-                                   f"- and _")
+        if not isinstance(value, str) or not ID.match(value) or len(value) > MAX_ID:
+            shown = repr(value) if not isinstance(value, str) or len(value) <= 40 else \
+                f"{value[:20]!r}... ({len(value)} characters)"
+            raise self.error("id", f"bad id {shown}; allowed: a letter, then letters, digits, "
+                                   f"- and _, at most {MAX_ID} characters")
         return value
 
     def names(self, key: str, required: bool = True) -> list[str]:

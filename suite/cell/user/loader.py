@@ -26,6 +26,7 @@ from pathlib import Path
 
 from gnibench.suite.cell.user.entries import Entry
 from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.guard import UserCodeError, user_code
 
 GROUPS = {"gnibench.problems": "problem", "gnibench.methods": "method"}
 ENV = "GNIBENCH_LOAD"
@@ -86,6 +87,11 @@ def discover() -> None:
     except BaseException:
         _discovered = False             # the next call tries again (and says so again)
         raise
+
+
+def _short(value) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
 
 
 def load_paths() -> list[str]:
@@ -183,15 +189,19 @@ def _load_entry_point(group: str, name: str) -> list[str]:
     if not found:
         raise UserError(f"no entry point {name!r} in the group {group}")
     try:
-        obj = found[0].load()
-        obj = obj() if callable(obj) else obj
-    except Exception as e:  # noqa: BLE001 - a broken plugin: one line naming it
-        raise UserError(f"entry point {origin.name} ({found[0].value}) cannot be loaded: "
-                        f"{type(e).__name__}: {e}") from None
+        with user_code(f"entry point {origin.name} ({found[0].value})"):
+            obj = found[0].load()
+            obj = obj() if callable(obj) else obj
+    except UserCodeError as e:          # a broken plugin (sys.exit included): one line naming it
+        raise UserError(f"{str(e).replace(': ', ' cannot be loaded: ', 1)}") from None
     items = obj if isinstance(obj, list) else [obj]
-    if not all(isinstance(t, dict) for t in items):
-        raise UserError(f"entry point {origin.name} gives {type(obj).__name__}; allowed: a "
-                        f"definition table (dict), a list of them, or a function returning either")
+    allowed = "a definition table (dict), a list of them, or a function returning either"
+    if not isinstance(obj, (list, dict)):
+        raise UserError(f"entry point {origin.name} gives {type(obj).__name__}; allowed: {allowed}")
+    for k, t in enumerate(items):
+        if not isinstance(t, dict):
+            raise UserError(f"entry point {origin.name} gives a list whose element {k} is "
+                            f"{type(t).__name__} ({_short(t)}); allowed: {allowed}")
     kind = GROUPS[group]
     tables = [Entry(f"entry point {origin.name}", kind, k, {"id": name, **t})
               for k, t in enumerate(items, 1)]

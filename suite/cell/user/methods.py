@@ -156,9 +156,10 @@ def _check_rk(e: Entry, exact, rational: bool, order: int, key: str, c=True,
 
 def _runge_kutta(e: Entry, kind: str, info: dict, order: int) -> Method:
     from gnibench.methods import embedded_rk
-    from gnibench.methods.explicit_rk import generate_erk
-    from gnibench.methods.implicit_rk import _d_coefficients, generate_irk
-    from gnibench.methods.prk import generate_prk
+    from gnibench.methods.assembly.steps.erk import write_erk
+    from gnibench.methods.assembly.steps.irk import write_irk
+    from gnibench.methods.assembly.steps.prk import write_prk
+    from gnibench.methods.implicit_rk import _d_coefficients
 
     explicit = kind == "explicit-rk"
     exact, (a, b, c), rational = _tableau(e, e.table, "", lower=explicit)
@@ -179,19 +180,18 @@ def _runge_kutta(e: Entry, kind: str, info: dict, order: int) -> Method:
     if "order_hat" in e.table:
         raise e.error("order_hat", "applies only with b_hat (an embedded pair)")
     if explicit:
-        return Method(family="explicit-rk", generate=generate_erk(tab), data=tab, **info)
+        return Method(family="explicit-rk", generate=write_erk(tab), data=tab, **info)
     try:
-        _d_coefficients(tab)
-        generate = generate_irk(tab)              # A invertible: y1 from the stages (kernels/irk)
+        generate = write_irk(tab, _d_coefficients(tab))  # A invertible: y1 from the stages
     except (StopIteration, ZeroDivisionError):
-        generate = generate_prk((a, b))            # singular A (Lobatto IIIA): b from f(Y_j)
+        generate = write_prk((a, b))               # singular A (Lobatto IIIA): b from f(Y_j)
     return Method(family="implicit-rk", generate=generate, data=tab, implicit=True,
                   params=(H_PARAM,) + NEWTON_PARAMS, **info)
 
 
 def _partitioned(e: Entry, info: dict, order: int) -> Method:
     from gnibench.methods import prk_conditions
-    from gnibench.methods.prk import _stage_order, generate_prk
+    from gnibench.methods.assembly.steps.prk import stage_order, write_prk
 
     forms, kernel, rational, cs = [], [], True, []
     for block in ("u", "v"):
@@ -222,8 +222,8 @@ def _partitioned(e: Entry, info: dict, order: int) -> Method:
     check_declared(e, info, forms[0], forms[1], cs[0],
                    tolerance(rational, rtol, [x for a, b in forms for x in (*b, *(y for row in a for y in row))]))
     (au, bu), (av, bv) = kernel
-    explicit = _stage_order(au, av, bu, bv, True, True) is not None
-    return Method(family="partitioned-rk", generate=generate_prk(kernel[0], kernel[1]),
+    explicit = stage_order(au, av, bu, bv, True, True) is not None
+    return Method(family="partitioned-rk", generate=write_prk(kernel[0], kernel[1]),
                   data=tuple(forms), needs=("partition",), implicit=True,
                   explicit_when="separable" if explicit else "",
                   params=(H_PARAM,) + NEWTON_PARAMS, **info)
@@ -260,8 +260,10 @@ def forms_of(method: Method):
 def _composition(e: Entry, info: dict, known, definition: dict) -> Method:
     import sympy as sp
     from gnibench.methods import METHODS, prk_conditions
-    from gnibench.methods.compositions import composed_step, runtime_data
-    from gnibench.methods.prk import PRK_FORMS, CompositionMethod, compose, generate_composition
+    from gnibench.methods.assembly.steps.partitioned import composed_step
+    from gnibench.methods.assembly.steps.prk import write_composition
+    from gnibench.methods.compositions import runtime_data
+    from gnibench.methods.prk import PRK_FORMS, CompositionMethod, compose
 
     basis_id = e.text("basis")
     basis = known(basis_id)
@@ -310,7 +312,7 @@ def _composition(e: Entry, info: dict, known, definition: dict) -> Method:
         definition["basis"] = json.loads(basis.definition)
     newton = tuple(x for x in basis.params if x.name == "newton_maxit")
     floats = tuple(float(x.evalf(30)) for x in gammas)
-    generate, data = generate_composition(basis, floats), basis.runtime_data
+    generate, data = write_composition(basis, floats), basis.runtime_data
     if basis is METHODS.get("stormer-verlet"):    # the shipped compositions' kernel, γ in par
         generate, data = composed_step, runtime_data(floats)
     return CompositionMethod(

@@ -32,6 +32,7 @@ import numpy as np
 from gnibench.methods.engines.base import EngineRun
 from gnibench.methods.external import ExternalMethod
 from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.guard import UserCodeError, user_code
 
 #: (entry, base) -> (function, module, (mtime, size) of its file, digest of its source)
 _ENTRIES: dict[tuple[str, str], tuple] = {}
@@ -95,20 +96,21 @@ def entry_code(entry: str, base: str = "") -> tuple:
         if not _changed(stamp, mod):
             return fn, digest
         if _source(mod)[1] != digest:
-            importlib.reload(mod)
+            with user_code(f"importing {mod.__name__}"):
+                importlib.reload(mod)
         del _ENTRIES[key]
     match = re.fullmatch(r"\s*([A-Za-z_][\w.]*)\s*:\s*([A-Za-z_][\w.]*)\s*", entry)
     if match is None:
         raise ValueError(f"bad entry {entry!r}; allowed: 'module:function'")
     module, name = match.groups()
     try:
-        mod = importlib.import_module(module)
+        mod = _import(module)
     except ModuleNotFoundError:
         if not base:
             raise
         sys.path.insert(0, base)
         try:
-            mod = importlib.import_module(module)
+            mod = _import(module)
         finally:
             sys.path.remove(base)
     stamp, digest = _source(mod)
@@ -119,6 +121,19 @@ def entry_code(entry: str, base: str = "") -> tuple:
         raise TypeError(f"{entry} is not callable")
     _ENTRIES[key] = (fn, mod, stamp, digest)
     return fn, digest
+
+
+def _import(module: str):
+    """Import the user's module: what its top level raises (sys.exit included) is a
+    UserCodeError; a missing module stays a ModuleNotFoundError."""
+    try:
+        with user_code(f"importing {module}"):
+            return importlib.import_module(module)
+    except UserCodeError as e:
+        if isinstance(e.__context__, ModuleNotFoundError) and \
+                getattr(e.__context__, "name", None) == module.partition(".")[0]:
+            raise e.__context__ from None
+        raise
 
 
 def resolve_entry(entry: str, base: str = ""):
@@ -143,6 +158,10 @@ def _field(problem):
 
     pk = problem_kernel(problem)
     base_f, par, n = pk.kernel.base_f, pk.par, problem.record.dim
+    # loaded (or compiled) now, with the setup: numba loads a cached function at its first call,
+    # and a Ctrl-C inside numba's loading is a hard exit after a grace time (cli/signals.py),
+    # which would lose the rows of the first steps
+    base_f(tuple(float(v) for v in problem.record.y0(problem.values)), par)
     count = [0]
 
     def f(t, y):
@@ -153,8 +172,16 @@ def _field(problem):
     return f, count
 
 
+def _real(value, what: str) -> np.ndarray:
+    """The user's numbers as floats; complex values are refused, not cut to their real part."""
+    a = np.asarray(value)
+    if np.iscomplexobj(a):
+        raise ValueError(f"{what} complex values; expected real numbers")
+    return np.asarray(a, dtype=float)
+
+
 def _state(value, n: int) -> np.ndarray:
-    y = np.asarray(value, dtype=float)
+    y = _real(value, "returned")
     if y.shape != (n,):
         raise ValueError(f"returned shape {y.shape}; expected ({n},)")
     return y
@@ -200,20 +227,23 @@ def stepper(entry: str, base: str, code: str = ""):
         setup = time.perf_counter() - t0
         status, reason, done, k = "ok", "", 1, 1
         t1 = time.perf_counter()
-        for i in range(1, grid.nsteps + 1):
-            h = grid.h if i < grid.nsteps else grid.h_last
-            try:
-                y = _state(step(f, (i - 1) * grid.h, y.copy(), h), n)
-            except Exception as e:  # noqa: BLE001 - the user's code: a status, not a crash
-                status, reason = "error", f"{entry} at step {i}: {type(e).__name__}: {e}"
-                break
-            if not np.all(np.isfinite(y)):
-                status, reason = "nonfinite", f"state overflowed or became NaN at step {i}"
-                break
-            if k < rows and marks[k] == i:
-                out[k], nfev[k] = y, count[0]
-                k += 1
-                done = k
+        i = 0
+        try:
+            with user_code(lambda: f"{entry} at step {i}"):
+                for i in range(1, grid.nsteps + 1):
+                    h = grid.h if i < grid.nsteps else grid.h_last
+                    y = _state(step(f, (i - 1) * grid.h, y.copy(), h), n)
+                    if not np.all(np.isfinite(y)):
+                        status, reason = "nonfinite", f"state overflowed or became NaN at step {i}"
+                        break
+                    if k < rows and marks[k] == i:
+                        out[k], nfev[k] = y, count[0]
+                        k += 1
+                        done = k
+        except UserCodeError as e:          # the user's code: a status, not a crash
+            status, reason = "error", str(e)
+        except KeyboardInterrupt:           # Ctrl-C, SIGTERM: the rows so far are kept
+            status, reason = "interrupted", ""
         seconds = time.perf_counter() - t1
         info = {"engine": "python", "entry": entry, "steps": "calls of the step function",
                 "nfev": "calls of f"}
@@ -238,22 +268,27 @@ def solver(entry: str, base: str, code: str = ""):
         t_eval = np.array(grid.t, dtype=float)
         y0 = np.array(problem.record.y0(problem.values), dtype=float)
         setup = time.perf_counter() - t0
-        status, reason, steps, reported = "ok", "", None, None
+        status, reason, steps, reported, interrupted = "ok", "", None, None, False
         t1 = time.perf_counter()
         try:
-            result = solve(f, y0.copy(), (0.0, float(t_eval[-1])), t_eval.copy(),
-                           float(values["rtol"]), float(values["atol"]))
+            with user_code(entry):
+                result = solve(f, y0.copy(), (0.0, float(t_eval[-1])), t_eval.copy(),
+                               float(values["rtol"]), float(values["atol"]))
             if isinstance(result, dict):
                 status = str(result.get("status", "ok"))
                 reason = "" if status == "ok" else str(result.get("message", ""))
                 steps, reported = _count(result, "steps"), _count(result, "nfev")
                 result = result["y"]
-            y = np.asarray(result, dtype=float)
+            y = _real(result, "returned samples with")
             if y.ndim != 2 or y.shape[1] != n or len(y) > len(t_eval):
                 raise ValueError(f"returned samples of shape {y.shape}; expected "
                                  f"({len(t_eval)}, {n})")
-        except Exception as e:  # noqa: BLE001 - the user's code: a status, not a crash
+        except UserCodeError as e:      # the user's code: a status, not a crash
+            y, status, reason = np.empty((0, n)), "error", str(e)
+        except Exception as e:  # noqa: BLE001 - what it returned: a status, not a crash
             y, status, reason = np.empty((0, n)), "error", f"{entry}: {type(e).__name__}: {e}"
+        except KeyboardInterrupt:       # Ctrl-C, SIGTERM: the initial point is kept
+            y, status, reason, interrupted = np.empty((0, n)), "interrupted", "", True
         seconds = time.perf_counter() - t1
         bad = ~np.all(np.isfinite(y), axis=1)
         if bad.any():
@@ -261,7 +296,8 @@ def solver(entry: str, base: str, code: str = ""):
             reason = reason or "the solver returned non-finite samples"
         elif len(y) < len(t_eval) and status == "ok":
             status, reason = "error", f"the solver returned {len(y)} of {len(t_eval)} samples"
-        if status not in ("ok", "nonfinite", "error", "max_steps", "step_too_small"):
+        if status not in ("ok", "nonfinite", "error", "max_steps", "step_too_small") and \
+                not interrupted:
             status, reason = "error", f"{entry} returned status {status!r}: {reason}"
         if not len(y):                  # nothing usable: the initial point, as a failed call
             y = y0[None, :]
