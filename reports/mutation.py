@@ -47,9 +47,11 @@ def score_line(doc: dict) -> str:
     commit = (doc.get("commit") or "unrecorded")[:10]
     done = "" if doc.get("complete", True) else \
         f" (interrupted: {doc['total']} of {doc.get('planned', '?')} mutants)"
-    return (f"**{doc['killed']} of {doc['total']} killed** ({100 * doc['killed'] / doc['total']:.0f} %) "
-            f"on {doc.get('date', '?')}, commit {commit}, at the {doc.get('scale', '?')} scale, "
-            f"with {ran}{done}.")
+    open_ = sum(bool(row.get("inconclusive")) for row in doc.get("mutants", []))
+    unsettled = f", {open_} inconclusive (time limit)" if open_ else ""
+    return (f"**{doc['killed']} of {doc['total']} killed** ({100 * doc['killed'] / doc['total']:.0f} %"
+            f"{unsettled}) on {doc.get('date', '?')}, commit {commit}, at the "
+            f"{doc.get('scale', '?')} scale, with {ran}{done}.")
 
 
 def _killer(row: dict) -> str:

@@ -24,6 +24,9 @@ def test_score_line_says_when_where_and_what_ran():
     assert "every test file whose imports reach the mutated file" in line
     assert "a hand-kept list of 2 test files" in M.score_line(campaign(["a", "b"]))
     assert "interrupted: 3 of 5 mutants" in M.score_line(campaign(complete=False))
+    doc = campaign()
+    doc["mutants"][1]["inconclusive"] = "tests (2 files): tests timed out after 9 s (limit 9 s)"
+    assert "(67 %, 1 inconclusive (time limit))" in M.score_line(doc)
 
 
 def test_tables_name_killers_and_blind_spots(tmp_path):
