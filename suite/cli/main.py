@@ -146,9 +146,15 @@ def _parser() -> argparse.ArgumentParser:
     v.add_argument("--no-report", action="store_true",
                    help="do not write the report site (DIR/report/index.html)")
     v.add_argument("--mutants", nargs="?", const="all", default=None, metavar="ID,...|FILE.toml",
-                   help="mutation testing: run the ledger and the catalog's tests on copies of the "
+                   help="mutation testing: run the ledger and the tests on copies of the "
                         "package with each mutant (or those named, or those of a TOML file of held-out "
                         "[[mutant]] entries) applied; writes DIR/mutants.json")
+    v.add_argument("--mutant-tests", default="auto", metavar="auto|all|none",
+                   help="the tests run against each mutant: auto (those whose imports reach the "
+                        "mutated file), all (the complete test suite), none (the ledger only)")
+    v.add_argument("--mutant-timeout", type=float, default=3600.0, metavar="SECONDS",
+                   help="the longest a phase of a mutant's verification may run (an overrun of "
+                        "4x the baseline's time plus 120 s within it kills the mutant)")
     r.add_argument("--no-report", action="store_true",
                    help="do not write the report (DIR/report/index.html); summary.md is written")
 

@@ -25,8 +25,10 @@ SOLVERS = {"rk45": "RK45", "rk23": "RK23", "dop853": "DOP853", "radau": "Radau",
            "lsoda": "LSODA"}
 
 
-def direct(problem: str, solver: str, t_eval, tol: float, with_jac: bool, t_end=None):
-    """solve_ivp called as a user would, on the problem's compiled field (and Jacobian)."""
+def direct(problem: str, solver: str, t_eval, tol: float, with_jac: bool, t_end=None,
+           atol: float | None = None):
+    """solve_ivp called as a user would, on the problem's compiled field (and Jacobian), with
+    rtol = tol and atol = tol (or ``atol``)."""
     bound, _ = prepare(problem, "rk4")
     pk = problem_kernel(bound)
     f, J, par = pk.kernel.base_f, pk.kernel.base_jac, pk.par
@@ -42,7 +44,8 @@ def direct(problem: str, solver: str, t_eval, tol: float, with_jac: bool, t_end=
     t_end = t_eval[-1] if t_end is None else t_end
     with threadpool_limits(1, user_api="blas"):      # as the engine runs (Radau's LU rounds
         return solve_ivp(lambda t, y: f(tuple(y), par), (0.0, t_end), y0,    # by thread count)
-                         method=solver, t_eval=t_eval, rtol=tol, atol=tol, **kw)
+                         method=solver, t_eval=t_eval, rtol=tol,
+                         atol=tol if atol is None else atol, **kw)
 
 
 def test_dop853_is_solve_ivp_on_kepler():
