@@ -43,17 +43,15 @@ def add_setups(cells):
 def options(method: str) -> dict[str, str]:
     """The options of a canonical method spec, ``name=value`` of the base and
     ``modifier.name=value`` of each modifier, with the base and modifier ids as keys of value ""
-    (the canonical text is ``base:k=v,...+modifier:k=v,...``; spec values hold no ``+`` before a
-    letter, no ``,`` or ``:``)."""
-    import re
+    (read by the spec module's parser, :func:`gnibench.suite.cell.spec.structure`)."""
+    from gnibench.suite.cell.spec import structure
 
-    out: dict[str, str] = {}
-    for i, part in enumerate(re.split(r"\+(?=[A-Za-z])", str(method))):
-        ident, _, opts = part.partition(":")
-        out[ident if i == 0 else "+" + ident] = ""
-        for item in opts.split(",") if opts else ():
-            k, _, v = item.partition("=")
-            out[k if i == 0 else f"{ident}.{k}"] = v
+    parsed = structure(str(method))
+    out: dict[str, str] = {parsed.base.id: ""}
+    out.update(parsed.base.given)
+    for mod in parsed.modifiers:
+        out["+" + mod.id] = ""
+        out.update({f"{mod.id}.{k}": v for k, v in mod.given.items()})
     return out
 
 

@@ -53,9 +53,15 @@ def test_work_precision_curves_hold_every_measurable_ok_cell_in_sweep_order(tmp_
     cells = cells.assign(cell=range(len(cells)), max_global_error=cells["final_global_error"],
                          integrals="H/L", base_method=cells["family"], adaptive=True,
                          problem_id="kepler-2d")
+    from gnibench.reports.palette import styles
+    from gnibench.reports.setups import add_setups, family_names
+
+    cells = add_setups(cells.assign(t_end=6.283185307179586, swept=cells["sweep"],
+                                    setup_method=cells["family"]))
     wall = {i: 1e-3 * (i + 1) for i in cells["cell"]}
     jobs = []
-    wp_figures("kepler-2d", cells, wall, tmp_path, "k", "k", jobs)
+    wp_figures("kepler-2d", cells, wall, tmp_path, "k", "k", jobs, styles(cells),
+               family_names(cells))
     (job,) = jobs
     nfev_panel = job.plot.panels[0]
     dopri = next(s for s in nfev_panel.series if s.style["label"] == "dopri5")

@@ -14,6 +14,8 @@ def test_unranked_families_come_last_among_many():
                           "status": ["ok"] * 12 + ["nonfinite"], "reason": [""] * 12 + ["x"],
                           "nfev": [100.0 * (k + 1) for k in range(12)] + [10.0],
                           "max_global_error": [1e-9] * 12 + [np.inf]})
+    cells["setup"] = cells["cell"]                  # each family one setup (reports/setups.py)
+    cells["swept"] = ""
     wall = {k: 1e-3 * (k + 1) for k in range(13)}
     rows = league(cells, wall, 1e-8)
     assert [r.family for r in rows] == fams + ["broken"]
