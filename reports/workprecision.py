@@ -13,7 +13,7 @@ positive error are drawn; the page lists the others.
 What the errors can say is drawn with them (:mod:`gnibench.suite.metrics.regime`): points at or
 below the reference's accuracy estimate are hollow (they measure the reference, and are left out
 of the Pareto front, the league tables and the order fits), the reference's accuracy and the
-saturation level (an error of a tenth of the solution: the trajectory lost) are grey lines, and
+saturation level (an error of half the solution: the trajectory lost) are grey lines, and
 a panel whose every error is saturated says so in the caption. The Pareto front (the least cost
 at which some family reaches each accuracy) is a black dashed step line.
 """

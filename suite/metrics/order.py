@@ -5,7 +5,7 @@ O(t h^2)); the global error of a method of order p is O(t h^p) ([HLW] (1.5)-(1.7
 (1.17)). The observed order is the least-squares slope of log(error) against log(h)
 (GeometricIntegrators.jl style, as in tests/methods/test_orders.py):
 
-* points below a round-off plateau (1e-13), saturated points (an error of at least a tenth of
+* points below a round-off plateau (1e-13), saturated points (an error of at least half
   the solution's size or of |I(y0)|: the trajectory is lost, :mod:`.regime`), points at or below
   the reference's own accuracy estimate, points after the error stops decreasing, and failed
   runs (infinite or NaN errors) are dropped: the longest run of decreasing errors is kept;
