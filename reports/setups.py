@@ -41,18 +41,10 @@ def add_setups(cells):
 
 
 def options(method: str) -> dict[str, str]:
-    """The options of a canonical method spec, ``name=value`` of the base and
-    ``modifier.name=value`` of each modifier, with the base and modifier ids as keys of value ""
-    (read by the spec module's parser, :func:`gnibench.suite.cell.spec.structure`)."""
-    from gnibench.suite.cell.spec import structure
+    """The options of a canonical method spec by name (:func:`.families.method_options`)."""
+    from gnibench.suite.metrics.families import method_options
 
-    parsed = structure(str(method))
-    out: dict[str, str] = {parsed.base.id: ""}
-    out.update(parsed.base.given)
-    for mod in parsed.modifiers:
-        out["+" + mod.id] = ""
-        out.update({f"{mod.id}.{k}": v for k, v in mod.given.items()})
-    return out
+    return method_options(method)
 
 
 def swept_text(row) -> str:

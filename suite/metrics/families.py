@@ -47,6 +47,19 @@ def method_without_step(method: str) -> str:
     return structure(method).without("h").text()
 
 
+def method_options(method: str) -> dict[str, str]:
+    """The options of a canonical method spec, ``name=value`` of the base and
+    ``modifier.name=value`` of each modifier, with the base and modifier ids as keys of value ""
+    (the spec module's parser: the names a family's cells differ by, for the reports)."""
+    parsed = structure(str(method))
+    out: dict[str, str] = {parsed.base.id: ""}
+    out.update(parsed.base.given)
+    for mod in parsed.modifiers:
+        out["+" + mod.id] = ""
+        out.update({f"{mod.id}.{k}": v for k, v in mod.given.items()})
+    return out
+
+
 def final_time(row: pd.Series) -> str:
     """The planned final time, to 12 significant digits (t_end, or steps x h)."""
     import pandas as pd
