@@ -40,18 +40,13 @@ def add_setups(cells):
     return out
 
 
-def options(method: str) -> dict[str, str]:
-    """The options of a canonical method spec by name (:func:`.families.method_options`)."""
-    from gnibench.suite.metrics.families import method_options
-
-    return method_options(method)
-
-
 def swept_text(row) -> str:
     """The swept options of a cell and their values: ``h=0.01``, ``rtol=atol=1e-08`` (one value),
     ``rtol=1e-08, atol=1e-10``; "" when nothing is swept."""
     names = [n for n in str(row.get("swept") or "").split("/") if n]
-    given = options(row["method"])
+    from gnibench.suite.metrics.families import method_options
+
+    given = method_options(row["method"])
     pairs = [(n, given[n]) for n in names if n in given]
     if not pairs:
         return ""
@@ -72,7 +67,9 @@ def _method_words(methods: list[str], swept: list[str]) -> list[dict[str, str]]:
     """For each method spec (without its swept options ``swept``, "/"-joined), the words of its
     options that differ among them, by ``option <name>``: ``name=value``, else ``name swept``
     or ``name default``."""
-    opts = [options(m) for m in methods]
+    from gnibench.suite.metrics.families import method_options
+
+    opts = [method_options(m) for m in methods]
     names = list(dict.fromkeys(k for o in opts for k in o))
     differ = [k for k in names if len({o.get(k) for o in opts}) > 1]
     out = []
