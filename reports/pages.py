@@ -10,37 +10,12 @@ cells with their reasons.
 """
 from __future__ import annotations
 
-import math
 import re
 from pathlib import Path
 
-from gnibench.reports import ensembles, league, plots, workprecision
+from gnibench.reports import plots
 
-FIXED = {"cell", "group", "label", "problem", "method", "problem_id", "base_method", "modifiers",
-         "method_kind", "h", "t_end",
-         "steps_planned", "every", "status", "reason", "steps", "t_final", "nfev", "njev",
-         "samples", "integrals", "reference", "metrics", "metric_notes", "final_global_error",
-         "max_global_error", "family", "sweep", "sweep_value", "adaptive"}
 _NOTE = re.compile(r"^\s*\((choice|reading)\)\s*", re.IGNORECASE)
-
-
-def num(x, fmt: str = ".3g") -> str:
-    """A number for a table; ``–`` for missing values."""
-    if x is None:
-        return "–"
-    try:
-        v = float(x)
-    except (TypeError, ValueError):
-        import pandas as pd
-
-        return "–" if x is pd.NA else str(x)          # NA: a count the method did not report
-    if math.isnan(v):
-        return "–"
-    if math.isinf(v):
-        return "inf" if v > 0 else "-inf"
-    if v.is_integer() and abs(v) < 1e15 and fmt == ".3g":
-        return f"{v:.0f}"
-    return format(v, fmt)
 
 
 def split_description(text: str) -> tuple[list[str], list[dict]]:
@@ -64,101 +39,31 @@ def split_description(text: str) -> tuple[list[str], list[dict]]:
     return [" ".join(p) for p in paragraphs if p], notes
 
 
-def _horizon(row) -> str:
-    if row.get("t_end") is not None and not (isinstance(row["t_end"], float)
-                                             and math.isnan(row["t_end"])):
-        return f"t_end = {num(row['t_end'], '.6g')}"
-    return f"steps = {num(row.get('steps_planned'))}"
-
-
-def cells_table(part, samples, wall: dict[int, float], compile_s: dict[int, float],
-                by_cell: dict | None = None, memo: dict | None = None) -> dict:
-    """The table of one problem's cells: header, rows of strings, which columns are specs.
-    ``by_cell``: :func:`~gnibench.reports.plots.trajectories` of ``samples`` (if already split);
-    ``memo``: fitted growth exponents, shared with the figures."""
-    integrals = [i for i in dict.fromkeys("/".join(part["integrals"].fillna("")).split("/")) if i]
-    errs = [i for i in integrals if f"max_abs_err_{i}" in part and part[f"max_abs_err_{i}"].notna().any()]
-    has_global = part["final_global_error"].notna().any()
-    extra = [c for c in part.columns if c not in FIXED and not c.startswith("max_abs_err_")
-             and not c.startswith("growth_exponent_") and part[c].notna().any()
-             and not (part[c].astype(str) == "").all()]
-    header = ["cell", "method", "status", "horizon", "every", "t reached", "steps", "nfev",
-              "run ms", "compile s"]
-    header += [f"max |err {i}|" for i in errs] + [f"growth exp. {i}" for i in errs]
-    if has_global:
-        header += ["final global error", "max global error", "growth exp. global", "reference"]
-    header += extra
-    if samples is not None and by_cell is None:
-        by_cell = plots.trajectories(samples)
-    rows = []
-    for r in part.to_dict("records"):
-        cid = int(r["cell"])
-        s = by_cell.get(cid) if samples is not None else None
-        kind = " (runs in Python)" if r.get("method_kind") == "python" else ""
-        row = [str(cid), str(r["method"]) + kind, str(r["status"]), _horizon(r), num(r["every"]),
-               num(r["t_final"], ".6g"), num(r["steps"]), num(r["nfev"]),
-               num(wall.get(cid, math.nan) * 1e3), num(compile_s.get(cid), ".2f")]
-        row += [num(r[f"max_abs_err_{i}"]) for i in errs]
-        row += [num(plots.exponent(r, s, i, memo) if samples is not None else math.nan, ".2f")
-                for i in errs]
-        if has_global:
-            row += [num(r["final_global_error"]), num(r["max_global_error"]),
-                    num(plots.exponent(r, s, "global", memo) if samples is not None
-                        else math.nan, ".2f"),
-                    str(r.get("reference") or "–")]
-        row += [num(r[c]) if isinstance(r[c], (int, float)) else str(r[c]) for c in extra]
-        rows.append(row)
-    return {"header": header, "rows": rows, "code": [1], "status_col": True}
-
-
-def league_tables(part, wall: dict[int, float], thresholds) -> dict:
-    """The league tables of one problem, one per threshold, with the words stating them."""
-    column, words = league.accuracy_column(part)
-    if not column or not workprecision.has_sweeps(part):
-        return {}
-    tables = []
-    for eps in thresholds:
-        rows = league.league(part, wall, eps, column)
-        body = []
-        for r in rows:
-            failed = "; ".join(f"cell {c} {s}: {why}" if why else f"cell {c} {s}"
-                               for c, s, why in r.failed)
-            body.append([num(r.rank_nfev) if r.rank_nfev else "–", r.family,
-                         _cost(r.nfev, ".3g"), _cost(r.wall, ".3g", 1e3),
-                         num(r.rank_wall) if r.rank_wall else "–", num(r.best_error),
-                         f"{r.cells}", failed or "–"])
-        tables.append({"threshold": f"{eps:.0e}", "rows": body})
-    return {"measure": column, "words": words, "tables": tables,
-            "header": ["rank (nfev)", "method family", "nfev to reach ε", "wall ms to reach ε",
-                       "rank (wall)", "best error", "cells", "failed cells"],
-            "code": [1]}
-
-
-def _cost(c: league.Cost, fmt: str, scale: float = 1.0) -> str:
-    if c.how in ("not reached", "–"):
-        return c.how
-    value = num(c.value * scale, fmt)
-    if c.how == "bound":
-        return f"≤ {value} (cell {c.cells[0]})"
-    if c.how == "interpolated":
-        return f"{value} (cells {c.cells[0]}–{c.cells[1]})"
-    return f"{value} (cell {c.cells[0]})"
-
-
-def experiment_page(res, img_dir: Path, slug: str, thresholds, jobs) -> dict:
+def experiment_page(res, img_dir: Path, slug: str, thresholds, jobs, palette=None,
+                    plots_options: dict | None = None) -> dict:
     """The content of one experiment's page; the drawing of its figures (into ``img_dir``) is
-    appended to ``jobs``."""
-    meta, cells = res.meta, res.cells
+    appended to ``jobs``. ``palette``: the report's styles of the families
+    (:class:`gnibench.reports.palette.Palette`, shared by the pages); ``plots_options``: replace
+    the ``[report]`` keys of the experiment file."""
+    from gnibench.reports.palette import Palette
+    from gnibench.reports.section import problem_section
+    from gnibench.reports.setups import add_setups
+    from gnibench.suite.runs.report_schema import report_options
+
+    meta = res.meta
+    cells = add_setups(res.cells)
+    options = report_options({**(meta.get("report") or {}), **(plots_options or {})},
+                             f"{res.name}: report").model_dump()
+    palette = palette if palette is not None else Palette()
     paragraphs, notes = split_description(meta.get("description", ""))
-    wall = res.wall_by_cell()
-    t = res.timings
-    compile_s = {int(c): float(v) for c, v in zip(t["cell"], t["compile_seconds"])} if len(t) else {}
     counts = cells["status"].value_counts()
+    complete = bool(meta.get("complete", True))
     page = {
         "slug": slug, "name": res.name, "title": str(meta.get("title") or res.name),
         "reference": str(meta.get("reference") or ""), "source": str(meta.get("source") or ""),
-        "paragraphs": paragraphs, "notes": notes,
-        "complete": bool(meta.get("complete", True)),
+        "paragraphs": paragraphs, "notes": notes, "complete": complete,
+        "state": "incomplete" if not complete else ("failures" if (cells["status"] != "ok").any()
+                                                    else "complete"),
         "cells_done": str(meta.get("cells_done", len(cells))),
         "cells_total": str(meta.get("cells_total", len(cells))),
         "statuses": ", ".join(f"{n} {s}" for s, n in counts.items()),
@@ -166,6 +71,7 @@ def experiment_page(res, img_dir: Path, slug: str, thresholds, jobs) -> dict:
         "written_at": res.written_at, "toml": str(meta.get("experiment_toml") or ""),
         "dir": str(res.dir), "figure": res.figure, "figure_error": res.figure_error,
         "thresholds": [f"{e:.0e}" for e in thresholds], "problems": [],
+        "target": f"{options.get('target') or min(thresholds):.0e}",
     }
     if res.figure:
         page["figure"] = {**res.figure, "images": [f"{slug}/figure/{f}" for f in res.figure["images"]]}
@@ -179,24 +85,10 @@ def experiment_page(res, img_dir: Path, slug: str, thresholds, jobs) -> dict:
         part = cells[sections == problem]
         prefix = f"{i:02d}-" + re.sub(r"[^A-Za-z0-9._-]+", "_", str(problem))[:40]
         ps = samples[samples["cell"].isin(part["cell"])] if samples is not None else None
-        by_cell = plots.trajectories(ps) if ps is not None else None
-        memo: dict = {}
-        figs = plots.time_figures(problem, part, ps, img_dir, prefix, slug, jobs, by_cell, memo) \
-            if ps is not None and len(ps) else []
-        wp = workprecision.wp_figures(problem, part, wall, img_dir, prefix, slug, jobs) \
-            if workprecision.has_sweeps(part) else []
-        failed = [{"cell": str(r.cell), "method": str(r.method), "status": str(r.status),
-                   "reason": str(r.reason or "")} for r in part.itertuples() if r.status != "ok"]
-        groups = [{"group": str(g), "label": str(lab or "")} for g, lab in
-                  part[["group", "label"]].drop_duplicates().itertuples(index=False)]
-        ens = ensembles.section(res, part, img_dir, prefix, slug, thresholds, jobs)
-        page["problems"].append({
-            "name": str(problem), "anchor": prefix, "figures": [f.__dict__ for f in figs],
-            "ensemble": ens,
-            "wp": [f.__dict__ for f in wp], "no_nfev": workprecision.no_nfev(part) if wp else [],
-            "league": league_tables(part, wall, thresholds),
-            "table": cells_table(part, ps, wall, compile_s, by_cell, memo), "failed": failed,
-            "groups": groups})
+        page["problems"].append(problem_section(problem, part, ps, img_dir, prefix, slug, jobs,
+                                                res, thresholds, palette, options))
+    page["interactive"] = any(c["interactive"] for pr in page["problems"]
+                              for c in pr["contexts"])
     return page
 
 
@@ -231,9 +123,18 @@ def short_problems(cells) -> list[str]:
 
 
 def index_entry(page: dict) -> dict:
-    """What the index shows of an experiment page."""
+    """What the index shows of an experiment page: its state (complete, complete with
+    failures, incomplete), a thumbnail (the reproduced figure, else the first work-precision
+    diagram, else the first figure) and one headline (the cheapest family to reach the target
+    accuracy in the first context that ranks any)."""
+    contexts = [c for pr in page["problems"] for c in pr["contexts"]]
+    wp = [f["file"] for c in contexts for f in c["wp"]]
+    figs = [f["file"] for pr in page["problems"] for f in pr["figures"]]
+    heads = [c["headline"] for c in contexts if c["headline"]["text"]]
+    head = next((h for h in heads if h["rank"]), heads[0] if heads else {"text": ""})
     return {k: page[k] for k in ("slug", "name", "title", "reference", "complete", "cells_done",
-                                 "cells_total", "statuses")} | {
+                                 "cells_total", "statuses", "state")} | {
         "problems": page["problem_ids"],
         "has_figure": bool(page.get("figure")),
-        "thumb": next(iter((page.get("figure") or {}).get("images") or []), "")}
+        "headline": head["text"], "ranked": bool(head.get("rank")),
+        "thumb": next(iter((page.get("figure") or {}).get("images") or wp or figs), "")}

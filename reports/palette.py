@@ -1,41 +1,68 @@
-"""Colours, line styles and markers of the report figures: one place, so a method has the same
-colour in every figure of every page.
+"""Colours, markers and line styles of the report figures: one place, so a method has the same
+look in every figure of a report (its PNGs and its interactive diagrams alike).
 
-A method family (the cells' column ``family``, e.g. ``dopri5``, ``rk4+observer:...``)
-gets the colour of its base method (column ``base_method``) (the palette of the seeds' figures,
-:mod:`gnibench.reports.figures.style`, with a stable hash for methods added later); families that share a base method are told apart by line style, in the order given. The
-marker says how the method chooses its steps and runs: fixed step (square), adaptive (circle),
-external engine (triangle), Python code of the user's (diamond; ``method_kind`` of the cells
-table).
+A method family (the cells' column ``family``, e.g. ``dop853``, ``rk4+observer:theta=15``) gets a
+style the first time a report meets it (:class:`Palette`), in the order of the report's pages and
+cells, and keeps it on every page: the k-th family gets colour k mod 9 of Paul Tol's "muted"
+scheme (a qualitative scheme designed to stay distinct under the common colour-vision
+deficiencies, https://personal.sron.nl/~pault/), marker k mod 8 and line style ⌊k/9⌋ mod 3, so
+the first 72 families differ in colour or marker, and families with the same colour differ in
+marker and line style. Families of one figure that share their label (the same method in two
+setups, e.g. two ``atol``) are told apart by dotted and dash-dotted line styles (hollow markers
+mean something else: an error below the reference's accuracy).
 """
 from __future__ import annotations
 
-LINESTYLES = ("-", "--", ":", "-.", (0, (5, 1, 1, 1)), (0, (1, 3)))
-MARKERS = {"fixed": "s", "adaptive": "o", "external": "^", "python": "D"}
+#: Paul Tol's "muted" qualitative scheme (without its pale grey for missing data)
+COLOURS = ("#332288", "#CC6677", "#117733", "#882255", "#44AA99", "#999933", "#AA4499",
+           "#88CCEE", "#DDCC77")
+MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*")
+LINESTYLES = ("-", "--", "-.")
+#: the line styles of a family's second, third, ... setup in one figure
+VARIANTS = (":", (0, (1, 3)), (0, (3, 1, 1, 1, 1, 1)), (0, (5, 1)))
+
+#: the same styles in plotly's names (the interactive diagrams)
+PLOTLY_MARKERS = {"o": "circle", "s": "square", "^": "triangle-up", "D": "diamond",
+                  "v": "triangle-down", "P": "cross", "X": "x", "*": "star"}
+PLOTLY_DASH = {"-": "solid", "--": "dash", "-.": "dashdot", ":": "dot"}
 
 
-def colour(base: str) -> str:
-    """The colour of a base method id: the one of the seeds' figures
-    (:func:`gnibench.reports.figures.style.color_of`), so a method has one colour everywhere."""
-    from gnibench.reports.figures.style import color_of
+class Palette:
+    """Styles of method families, given in the order families are met (:meth:`of`)."""
 
-    return color_of(base)
+    def __init__(self, families=()):
+        self.index: dict[str, int] = {}
+        for f in families:
+            self.of(f)
+
+    def of(self, family: str, variant: int = 0) -> dict:
+        """matplotlib keywords (``color``, ``marker``, ``linestyle``) of a family label (its
+        ``variant``-th setup in a figure: another line style); a new label gets the next
+        style."""
+        k = self.index.setdefault(str(family), len(self.index))
+        style = {"color": COLOURS[k % len(COLOURS)], "marker": MARKERS[k % len(MARKERS)],
+                 "linestyle": LINESTYLES[(k // len(COLOURS)) % len(LINESTYLES)]}
+        if variant:
+            style["linestyle"] = VARIANTS[(variant - 1) % len(VARIANTS)]
+        return style
 
 
-def styles(cells) -> dict[str, dict]:
-    """matplotlib keyword arguments (``color``, ``linestyle``, ``marker``) for each family of the
-    cells table, in order: the base method's colour, a new line style for each further family of
-    the same base; the marker from ``method_kind`` (compiled, external, python) and
-    ``adaptive``."""
-    first = cells.drop_duplicates("family")
+def plotly_style(style: dict) -> dict:
+    """A style of :meth:`Palette.of` in plotly's terms: colour, marker symbol, line dash."""
+    dash = style["linestyle"]
+    return {"color": style["color"], "symbol": PLOTLY_MARKERS[style["marker"]],
+            "dash": PLOTLY_DASH.get(dash, "dot") if isinstance(dash, str) else "longdashdot"}
+
+
+def styles(cells, palette: Palette | None = None) -> dict:
+    """The style of each family of the cells, by setup id (column ``setup``): the palette's style
+    of its label (column ``family``), a variant for each further setup of the same label."""
+    palette = palette if palette is not None else Palette()
     seen: dict[str, int] = {}
     out = {}
-    for fam, base, kind, adaptive in zip(first["family"], first["base_method"],
-                                         first["method_kind"], first["adaptive"]):
-        k = seen.get(base, 0)
-        seen[base] = k + 1
-        if kind == "compiled":
-            kind = "adaptive" if adaptive else "fixed"
-        out[fam] = {"color": colour(base), "linestyle": LINESTYLES[k % len(LINESTYLES)],
-                    "marker": MARKERS[kind]}
+    first = cells.drop_duplicates("setup")
+    for setup, label in zip(first["setup"], first["family"]):
+        k = seen.get(label, 0)
+        seen[label] = k + 1
+        out[int(setup)] = palette.of(label, k)
     return out

@@ -1,46 +1,35 @@
-"""The default figures of an experiment page, described from its tables (drawn by
+"""The time plots of an experiment page, described from its tables (drawn by
 :mod:`gnibench.reports.render`, matplotlib's Agg canvas).
 
-Per problem: the invariant errors |I(y(t)) − I(y0)| against t (one panel per integral, log y,
-log x when the samples span two decades or more), with each curve's growth exponent in t in the
-legend (the ``growth`` metric's ``growth_exponent_<I>`` from cells.parquet when present, else the
-same fit, :func:`gnibench.suite.metrics.growth.growth_exponent` over the metric's default window
-[0.01 T, T]); the global error against t where a reference exists; η(nT) where the ``eta`` metric
-wrote it; and the Poincaré section points of section cells in the section's coordinates.
+Per problem: the invariant errors |I(y(t)) − I(y0)| against t (one panel per integral), with each
+curve's growth exponent in t in the legend (the ``growth`` metric's ``growth_exponent_<I>`` from
+cells.parquet when present, else the same fit, :func:`gnibench.suite.metrics.growth.growth_fit`
+over the metric's default window [0.01 T, T]; none over less than 0.8 decade); the global error
+against t where a reference exists; η(nT) where the ``eta`` metric wrote it; and the Poincaré
+section points of section cells in the section's coordinates.
 
-A panel shows at most :data:`MAX_CURVES` cells: beyond that, one cell per method family (the
-middle of its sweep by cost), and the caption says so. Exact zeros cannot be drawn on a log axis
-and are left out (the caption says how many).
+Which cells, which figures and which axes follow the experiment's ``[report]`` section (or the
+options of the plot helpers, :mod:`gnibench.reports.plot_api`;
+:mod:`gnibench.suite.runs.report_schema`): ``cells = "auto"`` draws every cell up to
+:data:`MAX_CURVES`, else one per family (the middle of its sweep by cost), and the caption says
+so; ``"all"``, a list of cell ids, or one family's sweep (``family``) otherwise. Each curve has
+its family's colour and marker (:mod:`gnibench.reports.palette`), lighter for the coarser cells of
+a sweep, and is labelled by its family and swept value (the full spec is in the table of cells).
+Exact zeros cannot be drawn on a log axis and are left out (the caption says how many).
 """
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 from gnibench.reports.drawing import Job
-from gnibench.reports.palette import styles
+from gnibench.reports.layout import Figure, clip, page_plot
 from gnibench.reports.render import Panel, Plot, Series
 
 MAX_CURVES = 12
-
-
-@dataclass
-class Figure:
-    """A written figure: file name (relative to the site), title, caption."""
-
-    file: str
-    title: str
-    caption: str
-
-
 BRIEF = 40
-
-
-def clip(text: str, width: int) -> str:
-    """``text`` cut to ``width`` characters, an ellipsis marking the cut."""
-    return text if len(text) <= width else text[:width - 1] + "…"
+__all__ = ["Figure", "clip", "time_figures"]
 
 
 def brief(problem: str, problem_id: str | None) -> str:
@@ -61,17 +50,45 @@ def problem_id_of(name: str, cells) -> str | None:
 
 
 def pick_cells(cells) -> tuple[list[int], str]:
-    """The cells to draw (ids) and a note when not all of them are drawn."""
+    """The cells drawn by default (ids) and a note when not all of them are drawn."""
     ids = [int(c) for c in cells["cell"]]
     if len(ids) <= MAX_CURVES:
         return ids, ""
     picked = []
-    for _, part in cells.groupby("family", sort=False):
+    for _, part in cells.groupby("setup", sort=False):
         part = part.sort_values("nfev", na_position="last", kind="stable")
         picked.append(int(part["cell"].iloc[(len(part) - 1) // 2]))
-    note = (f"{len(ids)} cells: one per method family is drawn (the middle of its sweep by "
-            f"nfev); the work-precision diagrams and the table show them all.")
+    note = (f"{len(ids)} cells: one per family is drawn (the middle of its sweep by nfev; "
+            f"[report] cells and family choose others); the work-precision diagrams and the table "
+            f"show them all.")
     return sorted(picked[:MAX_CURVES]), note
+
+
+def of_family(cells, family: str):
+    """The cells of a family, named by its label, its method id or its setup's method spec."""
+    hit = (cells["family"].astype(str) == family) | (cells["base_method"].astype(str) == family)
+    if "setup_method" in cells:
+        hit |= cells["setup_method"].astype(str) == family
+    return cells[hit]
+
+
+def choose_cells(cells, options: dict | None) -> tuple[list[int], str]:
+    """The cells the time plots show (``options``: the ``[report]`` keys ``cells`` and
+    ``family``) and a note saying which."""
+    options = options or {}
+    note = ""
+    family = options.get("family")
+    if family:
+        cells = of_family(cells, family)
+        note = f"The cells of family {family} ({len(cells)})."
+    chosen = options.get("cells", "auto")
+    if chosen == "all":
+        return [int(c) for c in cells["cell"]], note
+    if isinstance(chosen, (list, tuple)):
+        ids = [int(c) for c in chosen if int(c) in set(cells["cell"].astype(int))]
+        return ids, (note + f" Cells {', '.join(map(str, ids))}, as chosen.").strip()
+    ids, more = pick_cells(cells)
+    return ids, (note + " " + more).strip()
 
 
 def _rows(cells, ids) -> dict[int, dict]:
@@ -79,47 +96,34 @@ def _rows(cells, ids) -> dict[int, dict]:
     return {int(r["cell"]): r for r in cells[cells["cell"].isin(ids)].to_dict("records")}
 
 
-def curve_labels(cells, ids) -> dict[int, str]:
-    """The name of each drawn cell in a legend or a title: its method spec when it fits in 48
-    characters; else its group's label when no other drawn cell has that label (the specs of
-    [B] Fig 10's observer and penalty cells differ only after 48 characters); else the spec cut
-    to 48 characters."""
-    rows = _rows(cells, ids)
-    names = {cid: rows[cid].get("label") for cid in ids}
-    names = {cid: g.strip() if isinstance(g, str) else "" for cid, g in names.items()}
-    out = {}
-    for cid in ids:
-        spec, group = str(rows[cid]["method"]), names[cid]
-        unique = group and list(names.values()).count(group) == 1
-        out[cid] = clip(group if len(spec) > 48 and unique else spec, 48)
-    return out
-
-
 def _log_x(ts: list[np.ndarray]) -> bool:
     pos = np.concatenate([t[t > 0] for t in ts]) if ts else np.array([])
     return len(pos) > 1 and pos.max() / pos.min() >= 100
 
 
-def exponent(row, samples_cell, name: str, memo: dict | None = None) -> float:
-    """The growth exponent in t of err_<name> (or ``global``) of one cell (``samples_cell``: its
-    samples, or None); ``memo`` keeps fitted values by (cell, name)."""
-    from gnibench.suite.metrics.growth import envelope, growth_exponent
+def exponent(row, samples_cell, name: str, memo: dict | None = None) -> tuple[float, str]:
+    """The growth exponent in t of err_<name> (or ``global``) of one cell and why it is NaN
+    (``samples_cell``: its samples, or None); ``memo`` keeps fitted values by (cell, name)."""
+    from gnibench.suite.metrics.growth import envelope, growth_fit
 
     col = f"growth_exponent_{name}"
     if col in row and row[col] is not None and not (isinstance(row[col], float)
                                                    and math.isnan(row[col])):
-        return float(row[col])
+        return float(row[col]), ""
+    if col in row and isinstance(row.get(f"growth_reason_{name}"), str) and \
+            row[f"growth_reason_{name}"]:
+        return math.nan, row[f"growth_reason_{name}"]
     err_col = "global_error" if name == "global" else f"err_{name}"
     if samples_cell is None or err_col not in samples_cell or len(samples_cell) < 3:
-        return math.nan
+        return math.nan, "fewer than 3 samples"
     key = (int(row["cell"]), name)
     if memo is not None and key in memo:
         return memo[key]
     t = samples_cell["t"].to_numpy(float)
-    p = growth_exponent(t, envelope(samples_cell[err_col].to_numpy(float)), 0.01 * t[-1], t[-1])
+    fit = growth_fit(t, envelope(samples_cell[err_col].to_numpy(float)), 0.01 * t[-1], t[-1])
     if memo is not None:
-        memo[key] = p
-    return p
+        memo[key] = fit
+    return fit
 
 
 def trajectories(samples) -> dict[int, object]:
@@ -131,7 +135,7 @@ def trajectories(samples) -> dict[int, object]:
 def shades(cells) -> dict[int, float]:
     """Opacity per cell: the cells of one family from 0.45 (coarsest h or loosest tolerance) to 1."""
     out = {}
-    for _, part in cells.groupby("family", sort=False):
+    for _, part in cells.groupby("setup", sort=False):
         part = part.sort_values("sweep_value", ascending=False, kind="stable")
         n = len(part)
         for k, cid in enumerate(part["cell"]):
@@ -139,146 +143,133 @@ def shades(cells) -> dict[int, float]:
     return out
 
 
-def _panel(cells, by_cell, ids, column, style, name, with_exponent=True, memo=None,
-           shade=None) -> tuple[Panel, int]:
-    """|column| against t for the cells (``by_cell``: their samples by id), with a legend on the
-    right of the panel (cell, method, growth exponent in t); and how many exact zeros were left
-    out."""
+def cell_label(row, names: dict[int, str]) -> str:
+    """A cell in a legend: its family's name and swept value, and its id."""
+    from gnibench.reports.setups import point_label
+
+    return f"{point_label(names[int(row['setup'])], row.get('swept_text', ''))} [{row['cell']}]"
+
+
+def _panel(cells, by_cell, ids, column, style, name, names, with_exponent=True, memo=None,
+           shade=None, yscale="log") -> tuple[Panel, int]:
+    """|column| against t for the cells (``by_cell``: their samples by id), labelled by family
+    and swept value (``with_exponent``: and the growth exponent in t); and how many exact zeros
+    were left out."""
     zeros = 0
     shade = shades(cells) if shade is None else shade
     rows = _rows(cells, ids)
-    names = curve_labels(cells, ids)
     ts = []
-    panel = Panel(yscale="log", xlabel="t", grid=True,
-                  legend={"fontsize": 7, "loc": "upper left", "bbox_to_anchor": (1.01, 1.0),
-                          "frameon": False})
+    panel = Panel(yscale=yscale, xlabel="t", grid=True)
     for cid in ids:
         row, s = rows[cid], by_cell.get(cid)
         if s is None or column not in s or s[column].isna().all():
             continue
         t, e = s["t"].to_numpy(float), np.abs(s[column].to_numpy(float))
-        ok = np.isfinite(e) & (e > 0) & (t > 0)
-        zeros += int(np.sum(e == 0))
+        ok = np.isfinite(e) & (t > 0) & ((e > 0) if yscale == "log" else True)
+        zeros += int(np.sum(e == 0)) if yscale == "log" else 0
         if not ok.any():
             continue
         ts.append(t[ok])
-        label = f"c{cid} {names[cid]}"
+        label = cell_label(row, names)
         if with_exponent:
-            p = exponent(row, s, name, memo)
+            p, _ = exponent(row, s, name, memo)
             label += f"  t^{p:.2f}" if math.isfinite(p) else ""
-        st = style[row["family"]]
+        st = style[int(row["setup"])]
         panel.series.append(Series(t[ok], e[ok], {
-            "color": st["color"], "linestyle": st["linestyle"], "linewidth": 1.1,
+            "color": st["color"], "linestyle": st["linestyle"], "linewidth": 1.2,
+            "marker": st["marker"], "markevery": max(1, int(ok.sum()) // 8), "markersize": 4.5,
             "alpha": shade.get(cid, 1.0), "label": label}))
-    if _log_x(ts):
-        panel.xscale = "log"
+    panel.xscale = "log" if _log_x(ts) else "linear"
     return panel, zeros
 
 
-def layout(size: tuple[float, float], rows: int, right: float = 0.98,
-           left: float = 0.09) -> dict:
-    """Fixed margins (tight_layout measures every tick label: seconds per page on log axes)."""
-    height = size[1]
-    return {"left": left, "right": right, "bottom": 0.55 / height + 0.02,
-            "top": 1 - 0.45 / height, "hspace": 0.42, "wspace": 0.28}
-
-
-#: a one-column figure's axes: left edge and width (inches); its legend column follows
-AXES_LEFT, AXES_WIDTH = 1.17, 6.11
-#: the legend's text size (points, as in :func:`_panel`), and its line handle and pads (inches)
-LEGEND_PT, HANDLE_IN = 7.0, 0.75
-#: advance widths of DejaVu Sans (matplotlib's default font), hundredths of an em, for the
-#: characters 32-126 (tests/reports/test_report_drawing.py checks them against the font); others: 1 em
-ADVANCE = (32, 40, 47, 84, 64, 96, 78, 28, 39, 39, 50, 85, 32, 36, 32, 34, 64, 64, 64, 64, 64,
-           64, 64, 64, 64, 64, 34, 34, 84, 85, 84, 53, 100, 68, 69, 70, 77, 63, 58, 78, 75, 29,
-           29, 65, 56, 86, 75, 79, 60, 79, 70, 64, 62, 73, 68, 99, 69, 61, 68, 39, 34, 39, 84,
-           50, 50, 62, 63, 56, 64, 62, 35, 64, 63, 28, 28, 58, 28, 97, 63, 61, 63, 64, 42, 52,
-           39, 63, 59, 82, 59, 59, 52, 63, 34, 64, 84)
-
-
-def text_width(text: str, points: float) -> float:
-    """The width (inches) of ``text`` in DejaVu Sans at ``points`` (no kerning: a bound)."""
-    ems = sum(ADVANCE[ord(c) - 32] if 32 <= ord(c) < 127 else 100 for c in text) / 100
-    return ems * points / 72
-
-
-def legend_width(panels: list[Panel], points: float = LEGEND_PT) -> float:
-    """The width (inches) of the widest legend of the panels: its longest label and the handle."""
-    labels = [str(s.style.get("label", "")) for p in panels for s in p.series]
-    return max((text_width(label, points) for label in labels), default=0.0) + HANDLE_IN
-
-
-def _grid(panels: list[Panel], cols: int = 1, right: float | None = None) -> Plot:
-    """The panels, one per row by default. ``right`` None: one column, legends to the right of
-    axes of a fixed size, the figure as wide as its longest legend label needs (8 to 20 in);
-    else the axes end at ``right`` (a fraction of 13 in, or of 6.2 in per column)."""
-    rows = math.ceil(len(panels) / cols)
-    height = 3.3 * rows + 0.8
-    if right is None:
-        width = min(20.0, max(8.0, AXES_LEFT + AXES_WIDTH + legend_width(panels)))
-        size = (width, height)
-        return Plot(size, rows, cols, panels,
-                    layout(size, rows, right=(AXES_LEFT + AXES_WIDTH) / width,
-                           left=AXES_LEFT / width))
-    size = (13.0 if cols == 1 else 6.2 * cols, height)
-    return Plot(size, rows, cols, panels, layout(size, rows, right=right))
-
-
 def time_figures(problem: str, cells, samples, out_dir: Path, prefix: str, slug: str,
-                 jobs, by_cell: dict | None = None, memo: dict | None = None) -> list[Figure]:
+                 jobs, by_cell: dict | None = None, memo: dict | None = None, style=None,
+                 names: dict | None = None, options: dict | None = None) -> list[Figure]:
     """The time-series figures of one problem (see the module docstring); their drawing is
-    appended to ``jobs``. ``by_cell``: :func:`trajectories` of the samples (if already split);
-    ``memo``: fitted growth exponents, shared with the table of cells."""
+    appended to ``jobs``. ``cells``: with the columns of :func:`gnibench.reports.setups.add_setups`;
+    ``by_cell``: :func:`trajectories` of the samples (if already split); ``memo``: fitted growth
+    exponents, shared with the table of cells; ``style``, ``names``: each family's style and
+    name by setup id; ``options``: the ``[report]`` section."""
     out: list[Figure] = []
+    for name, plot, title, caption in time_plots(problem, cells, samples, by_cell, memo, style,
+                                                 names, options):
+        jobs.append(Job(plot, out_dir / f"{prefix}-{name}.png"))
+        out.append(Figure(f"{slug}/{prefix}-{name}.png", title, caption))
+    return out
 
-    def add(name: str, plot: Plot, title: str, caption: str) -> None:
-        jobs.append(Job(plot, out_dir / name))
-        out.append(Figure(f"{slug}/{name}", title, caption))
 
+def time_plots(problem: str, cells, samples, by_cell=None, memo=None, style=None, names=None,
+               options: dict | None = None) -> list[tuple[str, Plot, str, str]]:
+    """The time plots of one problem as (name, plot, title, caption): see :func:`time_figures`."""
+    from gnibench.reports.palette import styles
+    from gnibench.reports.setups import family_names
+
+    options = options or {}
+    kinds = options.get("figures") or ("invariants", "global-error", "eta", "sections")
+    yscale = options.get("error_axis", "log")
+    axis = options.get("time_axis", "auto")
+    out = []
     traj = samples[samples["crossing"].isna()] if "crossing" in samples else samples
     by_cell = trajectories(samples) if by_cell is None else by_cell
+    style = styles(cells) if style is None else style
+    names = family_names(cells) if names is None else names
     shade = shades(cells)
-    ids, note = pick_cells(cells[cells["cell"].isin(traj["cell"].unique())])
-    style = styles(cells)
-    pid = problem_id_of(problem, cells)
+    ids, note = choose_cells(cells[cells["cell"].isin(traj["cell"].unique())], options)
+    short = brief(problem, problem_id_of(problem, cells))
+
+    def finish(panel: Panel) -> Panel:
+        if axis != "auto":
+            panel.xscale = axis
+        return panel
+
     integrals = [i for i in dict.fromkeys("/".join(cells["integrals"].fillna("")).split("/")) if i]
     integrals = [i for i in integrals if f"err_{i}" in traj and traj[f"err_{i}"].notna().any()]
-    if ids and integrals:
+    scale_words = f"{yscale} scale, t axis {'chosen: ' + axis if axis != 'auto' else 'log when the samples span two decades'}"
+    if ids and integrals and "invariants" in kinds:
         panels, zeros = [], 0
+        one = len(integrals) == 1           # one legend for all panels: exponents in one only
         for name in integrals:
-            panel, z = _panel(cells, by_cell, ids, f"err_{name}", style, name, memo=memo,
-                              shade=shade)
+            panel, z = _panel(cells, by_cell, ids, f"err_{name}", style, name, names,
+                              with_exponent=one, memo=memo, shade=shade, yscale=yscale)
             panel.ylabel = f"|{name}(y(t)) − {name}(y0)|"
-            panel.title = f"{brief(problem, pid)}: error of {name}"
-            panels.append(panel)
+            panel.title = f"error of {name}"
+            panels.append(finish(panel))
             zeros += z
-        cap = ("Invariant errors against time (log scale; legend: growth exponent in t of the "
-               "error envelope, fitted over [0.01 T, T]).")
+        cap = (f"Invariant errors against time ({scale_words}; legend: family, swept value, "
+               f"[cell]" + (", growth exponent in t of the error envelope fitted over [0.01 T, T]"
+                            ", none over less than 0.8 decade" if one else "; the growth "
+                            "exponents in t are in the table of cells") + ").")
         cap += f" {zeros} exact zeros are not drawn." if zeros else ""
-        add(f"{prefix}-invariants.png", _grid(panels), f"{problem}: invariant errors",
-            f"{cap} {note}".strip())
-    if ids and "global_error" in traj and traj.loc[traj["cell"].isin(ids), "global_error"].notna().any():
-        panel, _ = _panel(cells, by_cell, ids, "global_error", style, "global", memo=memo,
-                          shade=shade)
+        out.append(("invariants", page_plot(panels, cols=1 if one else 2, panel_height=3.2,
+                                            title=f"{short}: invariant errors"),
+                    f"{problem}: invariant errors", f"{cap} {note}".strip()))
+    if ids and "global-error" in kinds and "global_error" in traj and \
+            traj.loc[traj["cell"].isin(ids), "global_error"].notna().any():
+        panel, _ = _panel(cells, by_cell, ids, "global_error", style, "global", names, memo=memo,
+                          shade=shade, yscale=yscale)
         panel.ylabel = "global error |y − y_ref|"
         refs = sorted({r for r in cells["reference"].fillna("") if r}) if "reference" in cells else []
-        panel.title = f"{brief(problem, pid)}: global error" + (f" (against {', '.join(refs)})" if refs else "")
-        add(f"{prefix}-global-error.png", _grid([panel]), f"{problem}: global error",
-            f"Global error against time (legend: its growth exponent in t). {note}".strip())
-    if ids and "eta" in traj and traj["eta"].notna().any():
-        panel, _ = _panel(cells, by_cell, ids, "eta", style, "eta", with_exponent=False,
-                          shade=shade)
+        title = f"{short}: global error" + (f" (against {', '.join(refs)})" if refs else "")
+        out.append(("global-error", page_plot([finish(panel)], title=title),
+                    f"{problem}: global error",
+                    f"Global error against time ({scale_words}; legend: its growth exponent in "
+                    f"t). {note}".strip()))
+    if ids and "eta" in kinds and "eta" in traj and traj["eta"].notna().any():
+        panel, _ = _panel(cells, by_cell, ids, "eta", style, "eta", names, with_exponent=False,
+                          shade=shade, yscale=yscale)
         panel.ylabel = "η(nT) (rad)"
-        panel.title = f"{brief(problem, pid)}: η(nT), angle between q(0) and q(nT)"
-        add(f"{prefix}-eta.png", _grid([panel]), f"{problem}: η(nT)",
-            "η(nT) at whole periods ([B] §5.2, Fig 12), log scale.")
-    if "crossing" in samples and samples["crossing"].notna().any():
-        plot = section_plot(problem, cells, samples[samples["crossing"].notna()], style)
+        out.append(("eta", page_plot([finish(panel)], title=f"{short}: η(nT), angle "
+                                                           f"between q(0) and q(nT)"),
+                    f"{problem}: η(nT)", f"η(nT) at whole periods ([B] §5.2, Fig 12), {yscale} "
+                                         f"scale."))
+    if "sections" in kinds and "crossing" in samples and samples["crossing"].notna().any():
+        plot = section_plot(problem, cells, samples[samples["crossing"].notna()], style, names)
         if plot is not None:
             coords = section_coords(str(cells["problem_id"].iloc[0]))
-            add(f"{prefix}-sections.png", plot, f"{problem}: Poincaré section",
-                f"Section crossings in the section's coordinates ({coords[0]}, {coords[1]}), "
-                "one panel per section cell.")
+            out.append(("sections", plot, f"{problem}: Poincaré section",
+                        f"Section crossings in the section's coordinates ({coords[0]}, "
+                        f"{coords[1]}), one panel per section cell."))
     return out
 
 
@@ -302,19 +293,19 @@ def section_coords(problem_id: str) -> tuple[str, ...]:
     return tuple(section.coords) if section is not None else ()
 
 
-def section_plot(problem: str, cells, points, style) -> Plot | None:
+def section_plot(problem: str, cells, points, style, names) -> Plot | None:
     """One panel per section cell: its crossings in the section's coordinates."""
     coords = section_coords(str(cells["problem_id"].iloc[0]))
     if len(coords) < 2:
         return None
     ids = [int(c) for c in cells["cell"] if c in set(points["cell"])][:MAX_CURVES]
-    panels, names = [], curve_labels(cells, ids)
+    panels = []
     for cid in ids:
         row = cells.loc[cells["cell"] == cid].iloc[0]
         s = points[points["cell"] == cid]
         x, y = s[coords[0]].to_numpy(float), s[coords[1]].to_numpy(float)
-        panel = Panel(xlabel=coords[0], ylabel=coords[1], title_size=9,
-                      title=f"cell {cid}: {names[cid]}  ({len(s)} points)")
+        panel = Panel(xlabel=coords[0], ylabel=coords[1], title_size=10,
+                      title=clip(f"{cell_label(row, names)}  ({len(s)} points)", 60))
         if "chart" in s and s["chart"].notna().any():
             panel.series.append(Series(x, y, {
                 "s": 1.5, "c": s["chart"].to_numpy(float), "cmap": "tab10", "vmin": 0.5,
@@ -325,7 +316,9 @@ def section_plot(problem: str, cells, points, style) -> Plot | None:
                               "boundaries": [k + 0.5 for k in range(n + 1)],
                               "values": list(range(1, n + 1))}
         else:
-            panel.series.append(Series(x, y, {"s": 1.5, "color": style[row["family"]]["color"],
+            panel.series.append(Series(x, y, {"s": 1.5,
+                                              "color": style[int(row["setup"])]["color"],
                                               "linewidths": 0}, scatter=True))
         panels.append(panel)
-    return _grid(panels, cols=2 if len(ids) > 1 else 1, right=0.95)
+    return page_plot(panels, cols=2 if len(ids) > 1 else 1, panel_height=4.6,
+                     title=f"{brief(problem, problem_id_of(problem, cells))}: Poincaré section")

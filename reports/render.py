@@ -25,7 +25,10 @@ import numpy as np
 DPI = 100
 #: glyphs unhinted: a fifth of the drawing is FreeType's TrueType hinting interpreter, and at
 #: 100 dpi unhinted text is as legible (slightly softer)
-RC = {"text.hinting": "no_hinting"}
+RC = {"text.hinting": "no_hinting",
+      # readable at the page's width (a figure is shown at its own size: reports/layout.py)
+      "font.size": 10, "axes.labelsize": 10.5, "xtick.labelsize": 9.5, "ytick.labelsize": 9.5,
+      "legend.fontsize": 9, "axes.titlesize": 11}
 
 
 @dataclass
@@ -221,24 +224,28 @@ def render(plot: Plot, path: Path) -> None:
         _render(plot, path)
 
 
+def figure(plot: Plot):
+    """``plot`` as a matplotlib Figure, with the report's styles (:data:`RC`)."""
+    import matplotlib
+
+    with matplotlib.rc_context(RC):
+        return draw_figure(plot)
+
+
 def _render(plot: Plot, path: Path) -> None:
-    fig, canvas = figure(plot)
+    canvas = draw_figure(plot).canvas
     canvas.draw()
     _write_png(canvas, path)
 
 
-def figure(plot: Plot, fig=None):
-    """The matplotlib Figure of ``plot`` (not drawn yet) and its canvas: what :func:`render`
-    writes (a new Figure on an Agg canvas), or ``plot`` drawn into ``fig`` (the plot helpers of
-    the API draw into a pyplot figure, which a notebook shows)."""
+def draw_figure(plot: Plot):
+    """``plot`` drawn on a new matplotlib Figure (on an Agg canvas; no pyplot): what
+    :func:`render` writes, and what the plot helpers of ``gnibench.plot`` return."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    if fig is None:
-        fig = Figure(figsize=plot.size, dpi=DPI)
-        canvas = FigureCanvasAgg(fig)
-    else:
-        canvas = fig.canvas
+    fig = Figure(figsize=plot.size, dpi=DPI)
+    FigureCanvasAgg(fig)
     axes = fig.subplots(plot.rows, plot.cols, squeeze=False).ravel()
     fig.subplots_adjust(**plot.adjust)
     for ax in axes[len(plot.panels):]:
@@ -251,14 +258,14 @@ def figure(plot: Plot, fig=None):
         handles, labels = [], []
         for ax in axes:
             for h, lab in zip(*ax.get_legend_handles_labels()):
-                if lab not in labels:
+                if lab not in labels and not lab.startswith("_"):
                     handles.append(h)
                     labels.append(lab)
         if handles:
             fig.legend(handles, labels, **plot.legend)
     for ax in fig.axes:
         _ticks(ax)
-    return fig, canvas
+    return fig
 
 
 def _write_png(canvas, path: Path) -> None:

@@ -47,8 +47,26 @@ class Results:
         return read_table(path, cols)
 
     def wall_by_cell(self) -> dict[int, float]:
+        """Each cell's wall time (s): the fastest of its repeated timed runs."""
         t = self.timings
         return {int(c): float(w) for c, w in zip(t["cell"], t["wall_seconds"])} if len(t) else {}
+
+    def wall_stats(self) -> dict[int, tuple[float, float, float, int]]:
+        """Each cell's wall times: :func:`timing_stats` of the timings table."""
+        return timing_stats(self.timings)
+
+
+def timing_stats(t) -> dict[int, tuple[float, float, float, int]]:
+    """Each cell's wall times (s) from a timings table: (fastest, median, spread (max - min) /
+    median, runs); tables written before repeated timings count one run."""
+    if t is None or not len(t):
+        return {}
+    w = t["wall_seconds"].to_numpy(float)
+    med = t["wall_median_seconds"].to_numpy(float) if "wall_median_seconds" in t else w
+    spread = t["wall_spread"].to_numpy(float) if "wall_spread" in t else 0 * w
+    runs = t["repeats"].to_numpy(int) if "repeats" in t else (w == w).astype(int)
+    return {int(c): (float(a), float(b), float(s), int(n))
+            for c, a, b, s, n in zip(t["cell"], w, med, spread, runs)}
 
 
 @dataclass

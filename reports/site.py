@@ -8,12 +8,15 @@ Layout of the site directory::
     timing.html, timing.md          benchmark history (with a benchmark storage directory)
     <ledger>.html, .md              a claims ledger (gnibench verify), as a table
     img/<experiment>/*.png          figures; img/<experiment>/figure/ the reproduced figure's files
+    assets/plotly.min.js            plotly.js, for the interactive work-precision diagrams
 
-Every page works offline from ``file://``: styles are inline, images local, no script. Every
+Every page works offline from ``file://``: styles are inline, images local; the only scripts
+are plotly.js, copied into ``assets/`` (:mod:`gnibench.reports.interactive`), and the page's own
+few lines that hand it the interactive work-precision diagrams (JSON data, escaped). Every
 string that comes from a user or a file goes through the template engine: HTML with Jinja2's
 autoescape; Markdown through :func:`gnibench.reports.markdown.escape` (the environment's
 ``finalize``), specs in code spans that cannot be broken out of, the TOML text in a fence longer
-than any backtick run inside it.
+than any backtick run inside it. The Markdown pages show the static PNGs.
 """
 from __future__ import annotations
 
@@ -144,13 +147,13 @@ def natural_key(name: str) -> tuple:
                  for p in re.split(r"(\d+)", str(name)) if p)
 
 
-def _page(res, img_dir: Path, thresholds, jobs) -> dict:
+def _page(res, img_dir: Path, thresholds, jobs, palette=None, plots=None) -> dict:
     """One experiment's page; its figures (to be drawn into ``img_dir``) are appended to
     ``jobs`` (a :class:`~gnibench.reports.drawing.Figures`)."""
     import numpy as np
 
     with np.errstate(all="ignore"):
-        page = experiment_page(res, img_dir, img_dir.name, thresholds, jobs)
+        page = experiment_page(res, img_dir, img_dir.name, thresholds, jobs, palette, plots)
     if (img_dir / "figure").exists():
         shutil.rmtree(img_dir / "figure")
     _copy_figure(res, img_dir)
@@ -158,23 +161,29 @@ def _page(res, img_dir: Path, thresholds, jobs) -> dict:
 
 
 def build_site(dirs: list[Path], site: Path, thresholds=DEFAULT_THRESHOLDS,
-               benchmarks: Path | None = None, log=None, drawers=None) -> Path:
+               benchmarks: Path | None = None, log=None, drawers=None,
+               plots: dict | None = None) -> Path:
     """Write the site for the results directories ``dirs`` into ``site``; return index.html.
 
     ``thresholds``: the accuracies ε of the league tables. ``benchmarks``: a benchmark storage
     directory (pytest-benchmark layout, ``<machine>/NNNN_<commit>.json``) for the timing page.
     ``drawers``: a :class:`~gnibench.reports.drawing.Drawers` started earlier by the caller (who
     closes it), e.g. before the run whose results are reported; default: one of this call's.
-    Diverged cells (inf, overflow on log axes) are drawn as far as they are finite, silently.
+    ``plots``: ``[report]`` keys that replace those of every experiment file
+    (:mod:`gnibench.suite.runs.report_schema`). Diverged cells (inf, overflow on log axes) are
+    drawn as far as they are finite, silently. A method family has one style on every page
+    (:class:`gnibench.reports.palette.Palette`).
     """
     import numpy as np
 
     with np.errstate(all="ignore"):
-        return _build_site(dirs, site, thresholds, benchmarks, log, drawers)
+        return _build_site(dirs, site, thresholds, benchmarks, log, drawers, plots)
 
 
 def _build_site(dirs: list[Path], site: Path, thresholds, benchmarks: Path | None,
-                log, given) -> Path:
+                log, given, plots=None) -> Path:
+    from gnibench.reports.interactive import copy_library
+    from gnibench.reports.palette import Palette
     from gnibench.reports.timing import timing_page
 
     found, ledgers = find_results(dirs)
@@ -189,13 +198,16 @@ def _build_site(dirs: list[Path], site: Path, thresholds, benchmarks: Path | Non
             early_drawers([(res.dir, d) for res, d in zip(found, dirs)]) as drawers:
         # each figure is drawn (or reused) as soon as its page describes it: reports/drawing.py
         figures = Figures(drawers, dirs + ([img / "timing"] if benchmarks else []))
-        pages = [_page(res, d, thresholds, figures) for res, d in zip(found, dirs)]
+        palette = Palette()
+        pages = [_page(res, d, thresholds, figures, palette, plots) for res, d in zip(found, dirs)]
         timing = timing_page(benchmarks, img / "timing", "timing", figures) if benchmarks \
             else None
         figures.finish()
     if log is not None:
         for res in found:
             print(f"gnibench: report: {res.name} ({len(res.cells)} cells)", file=log, flush=True)
+    if any(p["interactive"] for p in pages):
+        copy_library(site)
     slugs = {p["slug"] for p in pages}
     ledger_pages = [ledger_page(lg, _unique(f"ledger-{lg.dir.name}", taken), slugs)
                     for lg in ledgers]

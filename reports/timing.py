@@ -13,8 +13,8 @@ from pathlib import Path
 
 import numpy as np
 from gnibench.reports.drawing import Job
-from gnibench.reports.pages import num
-from gnibench.reports.plots import Figure, layout
+from gnibench.reports.tables import num
+from gnibench.reports.layout import Figure, margins
 from gnibench.reports.render import Panel, Plot, Series
 from gnibench.suite.foundation.benchmarks import load_run, runs
 
@@ -93,7 +93,7 @@ def timing_page(storage: Path, out_dir: Path, slug: str, jobs=None) -> dict:
                 "color": colour, "linewidth": 0.6, "alpha": 0.6}))
         size = (11, 4.6)
         file = f"group-{gi:02d}.png"
-        jobs.append(Job(Plot(size, 1, 1, [panel], layout(size, 1, right=0.62)), out_dir / file))
+        jobs.append(Job(Plot(size, 1, 1, [panel], margins(size, 1, right=0.62)), out_dir / file))
         page["figures"].append(Figure(f"{slug}/{file}", str(group),
                                       "History of the median per benchmark (log scale).").__dict__)
     for (name, machine), series in df.groupby(["name", "machine"], sort=True):

@@ -11,6 +11,7 @@ import functools
 import os
 
 import numpy as np
+import pytest
 
 FULL = os.environ.get("GNIBENCH_TEST_FULL", "") not in ("", "0")
 
@@ -20,6 +21,26 @@ def cap(pids, n: int, registry) -> list[str]:
     order = list(registry)
     ranked = sorted(pids, key=lambda pid: (registry[pid].dim, order.index(pid)))
     return ranked if FULL else ranked[:n]
+
+
+def per_family(ids) -> list:
+    """Method ids as pytest parameters: the first of each family (``Method.family``: explicit-rk,
+    embedded-rk, extrapolation, implicit-rk, partitioned, composition, splitting,
+    generating-function) in the test command, so that every step writer and driver of the kernel
+    assembly is exercised there; the others marked ``slow`` (CI runs ``pytest -m slow`` once after
+    the test command; all of them run with ``GNIBENCH_TEST_FULL=1``). A registry-wide test over
+    every compiled method compiles a kernel module per method and output, the largest share of
+    the cold test command."""
+    from gnibench.methods import COMPILED
+
+    seen: set[str] = set()
+    out = []
+    for mid in ids:
+        family = getattr(COMPILED[mid], "family", None) or mid
+        first = family not in seen
+        seen.add(family)
+        out.append(mid if first or FULL else pytest.param(mid, marks=pytest.mark.slow))
+    return out
 
 
 def takes(pid: str, method: str) -> bool:

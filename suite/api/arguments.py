@@ -192,3 +192,12 @@ def api_function(fn):
 def allowed_text(fn, name: str) -> str:
     """What an API function's argument allows, in words (for the documentation and tests)."""
     return fn.schema.adapters()[name][1]
+
+
+def id_list(ids: str | list[str], function: str = "gnibench.verify") -> list[str]:
+    """The ids as a list; an empty list (or string) is refused: "all" says every one."""
+    chosen = [ids] if isinstance(ids, str) else list(ids)
+    if not chosen or any(not i for i in chosen):
+        raise UserError(f"{function}: bad ids {ids!r} (empty); allowed: one or more ids, or "
+                        f"\"all\"")
+    return chosen

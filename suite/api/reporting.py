@@ -16,12 +16,14 @@ def default_site(dirs: list[Path]) -> Path:
 
 
 def build_report(dirs: list[Path], output: Path | None = None, *, accuracy=None,
-                 benchmarks: Path | None = None, log=None, option: str = "-o") -> Path:
+                 benchmarks: Path | None = None, log=None, option: str = "-o",
+                 plots: dict | None = None) -> Path:
     """Render the site of the results directories ``dirs`` into ``output`` (default:
     :func:`default_site`); returns its ``index.html``. ``accuracy``: the accuracies ε of the
     league tables (default 1e-4, 1e-8); ``benchmarks``: a benchmark storage for the timing page
     (default ``./.benchmarks`` when it exists). Bad input raises UserError before anything is
-    written (``option``: how the caller names the site, in messages)."""
+    written (``option``: how the caller names the site, in messages). ``plots``: ``[report]``
+    keys that replace those of every experiment file."""
     from gnibench.reports.league import DEFAULT_THRESHOLDS
     from gnibench.reports.site import build_site
     from gnibench.suite.foundation.outputs import check_output_dir
@@ -29,6 +31,10 @@ def build_report(dirs: list[Path], output: Path | None = None, *, accuracy=None,
     if not dirs:
         raise UserError("no results directory given; allowed: one or more directories written "
                         "by gnibench run, reproduce or verify")
+    from gnibench.suite.runs.report_schema import report_options
+
+    if plots is not None:
+        report_options(plots, "plots")                # one line on a bad key, before any work
     thresholds = DEFAULT_THRESHOLDS if accuracy is None else tuple(accuracy)
     if not thresholds or not all(0 < a < math.inf for a in thresholds):
         raise UserError(f"bad accuracy {list(thresholds)!r}; allowed: numbers > 0, e.g. "
@@ -40,12 +46,14 @@ def build_report(dirs: list[Path], output: Path | None = None, *, accuracy=None,
     if benchmarks is not None and not Path(benchmarks).is_dir():
         raise UserError(f"bad --benchmarks {benchmarks}: not a directory")
     return Path(build_site([Path(d) for d in dirs], site, thresholds,
-                           None if benchmarks is None else Path(benchmarks), log=log))
+                           None if benchmarks is None else Path(benchmarks), log=log,
+                           plots=plots))
 
 
 @api_function
 def report(dirs: Path | list[Path], output: Path | None = None, *,
-           accuracy: list[float] | None = None, benchmarks: Path | None = None) -> Path:
+           accuracy: list[float] | None = None, benchmarks: Path | None = None,
+           plots: dict | None = None) -> Path:
     """Render the report site of results directories, as ``gnibench report DIR... -o SITE``.
 
     The site (``index.html``, one page per experiment, the ledger and the figures, each page
@@ -63,6 +71,11 @@ def report(dirs: Path | list[Path], output: Path | None = None, *,
     benchmarks : path, optional
         A benchmark storage (pytest-benchmark's layout) for the timing page; default
         ``./.benchmarks`` when it exists.
+    plots : dict, optional
+        What the figures show, as the experiment file's ``[report]`` section (its keys replace
+        the file's for every experiment): ``cells`` (``"auto"``, ``"all"`` or a list of cell
+        ids), ``family``, ``time_axis``, ``error_axis``, ``figures``, ``measures``, ``costs``,
+        ``target``.
 
     Returns
     -------
@@ -94,4 +107,4 @@ def report(dirs: Path | list[Path], output: Path | None = None, *,
     listed = [dirs] if isinstance(dirs, Path) else dirs
     with contextlib.redirect_stdout(io.StringIO()):
         return build_report(listed, output, accuracy=accuracy, benchmarks=benchmarks,
-                            option="output")
+                            option="output", plots=plots)

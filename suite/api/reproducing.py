@@ -163,7 +163,9 @@ def reproduce(ids: str | list[str] = "all", *, scale: str = "paper", output: Pat
     >>> sorted(p.name for p in (dirs["hlw-fig-1.4"] / "figure").iterdir())
     ['figure.json', 'hlw-fig-1.4.png', 'hlw-fig-1.4.svg']
     """
-    chosen = [ids] if isinstance(ids, str) else list(ids)
+    from gnibench.suite.api.arguments import id_list
+
+    chosen = id_list(ids, "gnibench.reproduce")
     return reproduce_figures(chosen, scale=scale, output=output,
                              jobs=None if redraw else jobs, executor=executor,
                              scheduler=scheduler, fresh=fresh, redraw=redraw)

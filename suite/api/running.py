@@ -124,7 +124,7 @@ def read_tables(out: Path, output: Path | None) -> RunResult:
 @api_function
 def run(experiment: str | Path | dict, *, output: Path | None = None, jobs: int | None = None,
         executor: str = "local", fresh: bool = False, scheduler: str | None = None,
-        scale: str = "paper") -> RunResult:
+        scale: str = "paper", repeat: int | None = None) -> RunResult:
     """Run an experiment (a matrix of problems x methods x options), as ``gnibench run``.
 
     Its cells run in parallel and are stored as they finish: an output directory given again
@@ -152,6 +152,10 @@ def run(experiment: str | Path | dict, *, output: Path | None = None, jobs: int 
         ``"tcp://127.0.0.1:8786"``.
     scale : {"paper", "quick"}, default "paper"
         The experiment's paper scale, or its shortened quick scale.
+    repeat : int, optional
+        Run each cell's timed integration this many times after the warm-up (the fastest, the
+        median and the spread go to ``timings``; a run that gives other numbers is an error);
+        default: the experiment's ``repeat``, else 1.
 
     Returns
     -------
@@ -186,9 +190,10 @@ def run(experiment: str | Path | dict, *, output: Path | None = None, jobs: int 
     discover()                      # GNIBENCH_LOAD and entry points, as `gnibench run`
     refresh()                       # definitions edited since they were loaded
     if isinstance(experiment, dict):        # its `load` paths are relative to the working dir
-        exp = parse_experiment(toml_text(experiment), "experiment dict", scale, Path.cwd())
+        exp = parse_experiment(toml_text(experiment), "experiment dict", scale, Path.cwd(),
+                               repeat)
     else:
-        exp = load_experiment(experiment, scale)
+        exp = load_experiment(experiment, scale, repeat)
     executors.check(executor, jobs, scheduler)
     with contextlib.ExitStack() as stack:
         if output is None:

@@ -37,7 +37,7 @@ class Trajectory:
     >>> traj.status, traj.reason
     ('ok', '')
     >>> list(traj.samples.columns)
-    ['t', 'p', 'q', 'err_H', 'global_error', 'steps', 'nfev']
+    ['t', 'p', 'q', 'err_H', 'global_error', 'steps', 'nfev', 'reference_error']
     """
 
     samples: object

@@ -12,7 +12,7 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from gnibench.suite.api.arguments import api_function
+from gnibench.suite.api.arguments import api_function, id_list
 from gnibench.suite.foundation.errors import UserError
 
 SCALES = ("quick", "paper")
@@ -86,10 +86,6 @@ def _judge(claims, dirs: dict[str, Path], out: Path, scale: str) -> Ledger:
     return Ledger(verdicts, out, scale)
 
 
-def _ids(ids: str | list[str]) -> list[str]:
-    return [ids] if isinstance(ids, str) else list(ids)
-
-
 @api_function
 def verify(ids: str | list[str] = "all", *, scale: str = "quick", output: Path | None = None,
            jobs: int | None = None, executor: str = "local", scheduler: str | None = None):
@@ -144,6 +140,6 @@ def verify(ids: str | list[str] = "all", *, scale: str = "quick", output: Path |
     with contextlib.ExitStack() as stack:
         out = output if output is not None else Path(
             stack.enter_context(tempfile.TemporaryDirectory(prefix="gnibench-verify-")))
-        check_claims(_ids(ids), scale=scale, output=out, jobs=jobs, executor=executor,
+        check_claims(id_list(ids), scale=scale, output=out, jobs=jobs, executor=executor,
                      scheduler=scheduler)
         return pd.read_parquet(out / "ledger.parquet")

@@ -185,10 +185,11 @@ _BRANCHES = {CellKind.FIXED: _compiled_cell, CellKind.ADAPTIVE: _compiled_cell,
 
 def attach_reference(traj: Trajectory, problem: Bound, reference) -> None:
     """The reference solution at the trajectory's sample times (:mod:`.reference`)."""
-    from gnibench.suite.cell.reference import reference_solution
+    from gnibench.suite.cell.reference import reference_accuracy, reference_solution
 
     if len(traj.t) == 0:
         return
     sol = reference_solution(problem, traj.t, reference)
     traj.reference = ReferenceSamples(sol.y, {**reference.describe(), "cached": sol.cached,
-                                              "seconds": sol.seconds})
+                                              "seconds": sol.seconds},
+                                      reference_accuracy(problem, sol))

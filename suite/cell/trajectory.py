@@ -18,11 +18,14 @@ class ReferenceSamples:
     """The reference solution at the trajectory's sample times (not only its distance).
 
     ``y`` has the shape of ``Trajectory.y``; ``describe`` says what it is (backend, precision,
-    tolerance, whether it came from the disk cache, seconds it took).
+    tolerance, whether it came from the disk cache, seconds it took); ``error`` its own accuracy
+    estimate at each sample (:func:`gnibench.suite.cell.reference.reference_accuracy`; None for
+    the exact solution).
     """
 
     y: np.ndarray
     describe: dict
+    error: np.ndarray | None = None
 
 
 @dataclass

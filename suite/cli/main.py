@@ -122,6 +122,9 @@ def _parser() -> argparse.ArgumentParser:
                    help="ignore the cells stored by earlier runs in the output directory")
     r.add_argument("--scale", default="paper", metavar="paper|quick",
                    help="the experiment's paper scale (default) or its shortened quick scale")
+    r.add_argument("--repeat", type=option("int", "--repeat"), default=None, metavar="N",
+                   help="run each cell's timed integration N times after the warm-up (min, "
+                        "median and spread in timings.parquet; default: the file's repeat, else 1)")
     _load_option(r)
 
     from gnibench.suite.cli.reproduce import add_parser
@@ -143,9 +146,15 @@ def _parser() -> argparse.ArgumentParser:
     v.add_argument("--no-report", action="store_true",
                    help="do not write the report site (DIR/report/index.html)")
     v.add_argument("--mutants", nargs="?", const="all", default=None, metavar="ID,...|FILE.toml",
-                   help="mutation testing: run the ledger and the catalog's tests on copies of the "
+                   help="mutation testing: run the ledger and the tests on copies of the "
                         "package with each mutant (or those named, or those of a TOML file of held-out "
                         "[[mutant]] entries) applied; writes DIR/mutants.json")
+    v.add_argument("--mutant-tests", default="auto", metavar="auto|all|none",
+                   help="the tests run against each mutant: auto (those whose imports reach the "
+                        "mutated file), all (the complete test suite), none (the ledger only)")
+    v.add_argument("--mutant-timeout", type=float, default=3600.0, metavar="SECONDS",
+                   help="the longest a phase of a mutant's verification may run (an overrun of "
+                        "4x the baseline's time plus 120 s within it kills the mutant)")
     r.add_argument("--no-report", action="store_true",
                    help="do not write the report (DIR/report/index.html); summary.md is written")
 
@@ -248,7 +257,7 @@ def _run_with(a, pool) -> int:
         out = run_experiment(a.experiment, a.output, jobs=a.jobs, executor=a.executor,
                              scheduler=a.scheduler, fresh=a.fresh, summarize=render_summary,
                              scale=a.scale, started=None if a.no_report else drawers.start,
-                             pool=pool)
+                             pool=pool, repeat=a.repeat)
         if not a.no_report:
             from gnibench.reports.site import build_site
 

@@ -95,9 +95,11 @@ def _summary(ledger) -> int:
 
 
 def mutants_command(a) -> int:
-    """``gnibench verify [ID...] --mutants [M1,M2,...]``: mutation testing of the ledger
-    (:mod:`gnibench.suite.ledger.mutants`): the baseline and each mutant on a copy of the package;
-    prints which claims or tests killed each mutant, writes ``DIR/mutants.json`` (default DIR:
+    """``gnibench verify [ID...] --mutants [M1,M2,...|FILE.toml] [--mutant-tests auto|all|none]
+    [--mutant-timeout S]``: mutation testing of the verification
+    (:mod:`gnibench.suite.ledger.mutants`): the baseline and each mutant on a copy of the package,
+    each checked by the ledger and the tests that can see the mutated file; prints which claims
+    or tests killed each mutant, writes ``DIR/mutants.json`` (default DIR:
     results/seeds, beside the ledger, so that its report page shows the score), exit 0 when every
     mutant was killed, 1 when some survived."""
     from gnibench.suite.api.verifying import check_scale
@@ -127,10 +129,17 @@ def mutants_command(a) -> int:
     from gnibench.suite.runs.reproduce import DEFAULT_DIR
 
     out = a.output if a.output is not None else DEFAULT_DIR
+    tests = getattr(a, "mutant_tests", "auto")
+    if tests not in ("auto", "all", "none"):
+        raise UserError(f"bad --mutant-tests {tests!r}; allowed: auto, all, none")
+    timeout = getattr(a, "mutant_timeout", 3600.0)
+    if not (math.isfinite(timeout) and timeout > 0):
+        raise UserError(f"bad --mutant-timeout {timeout!r}; allowed: a number of seconds > 0")
     doc = mutants.run_mutants(chosen, out, scale=a.scale, jobs=a.jobs or 2, claims=claims or None,
+                              tests=tests, timeout=timeout,
                               log=lambda s: print(s, file=sys.stderr))
     for m in doc["mutants"]:
-        by = ", ".join(m["claims"] + m["tests"]) or m["crash"]
+        by = ", ".join(m["claims"] + m["tests"]) or m["crash"] or m["timeout"]
         print(f"{m['id']:<34} {'killed by ' + by if m['killed'] else 'SURVIVED'}")
     print(f"gnibench: verify: mutation score {doc['killed']}/{doc['total']} at the {doc['scale']} "
           f"scale; {out / 'mutants.json'}", file=sys.stderr)

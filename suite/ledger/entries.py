@@ -12,6 +12,7 @@ An entry (``[[claim]]``)::
     figure     = "b-fig-7"                       # the figure it belongs to (a link), optional
     reading    = "..."                           # a doubtful OCR reading and the one used, optional
     note       = "..."                           # optional
+    one_sided  = "..."                           # why passes reads one side only (see below)
 
 and exactly one way of being checked:
 
@@ -46,6 +47,11 @@ horizon is complete); ``needed = "..."``: what would have been needed to reprodu
 step the run did not reach, is not measured and the claim not reproduced
 (:mod:`gnibench.suite.ledger.reach`). ``expected`` may also be ``not measured``: not reproduced
 because a run it needs does not complete (a regression record, like every ``expected``).
+A pass criterion that bounds a measured number on one side only (``measured >= 10``) states the
+other side where the seed gives one (a value "of order 10⁻¹⁰" is read within a factor 10 both
+ways); otherwise the entry says why in ``one_sided`` (a distance, >= 0 by construction; an
+inequality of the seed; "bounded"; "better" without a size): :mod:`gnibench.suite.ledger.sides`
+finds the one-sided comparisons, and the tests check that exactly those entries give a reason.
 Cell selectors: ``field=value`` / ``field~value`` terms joined by ``&``, alternatives by ``|``.
 Ids: those of the claims inventory, and ``<id>.corrected`` for the corrected relation of a seed's slip (the
 printed statement keeps the inventory id).
@@ -158,6 +164,8 @@ class Claim(Record):
     reach: Literal["", "horizon"] = key(
         "", "horizon: a section run that reached its horizon is complete (the count is a cap)")
     needed: Text = key("", "what would have been needed to reproduce the claim")
+    one_sided: Text = key("", "why passes bounds a measured number on one side only (the seed gives "
+                              "no other side; suite/ledger/sides.py)")
     side: Annotated[dict[Name, Annotated[Value, AfterValidator(_plain)]],
                     Field(max_length=64)] = key({}, "a not-checkable entry's side result: our "
                                                     "numbers, read as values are, shown beside it",

@@ -25,6 +25,12 @@ from gnibench.suite.metrics.invariants import invariant_errors
 
 GLOBAL = "global"
 FIT_POINTS = 64           # log-spaced times at which the envelope enters the exponent fit
+#: (choice) a growth exponent is fitted over samples spanning at least 0.8 of a decade of t (a
+#: factor 6.3; a window of one decade, [T/10, T], sampled at whole periods from the fourth of 30
+#: passes) and at least three samples; over less, a slope of log envelope against log t says
+#: nothing about t^p (NaN, with the reason)
+MIN_DECADES = 0.8
+MIN_SAMPLES = 3
 
 
 def envelope(err: np.ndarray) -> np.ndarray:
@@ -35,26 +41,39 @@ def envelope(err: np.ndarray) -> np.ndarray:
 
 def growth_exponent(t: np.ndarray, env: np.ndarray, t_lo: float, t_hi: float,
                     points: int = FIT_POINTS) -> float:
-    """Least-squares slope of log env against log t over [t_lo, t_hi] (the claims inventory, Conventions).
+    """Least-squares slope of log env against log t over [t_lo, t_hi] (the claims inventory, Conventions);
+    NaN when the range is too short (:func:`growth_fit` says why)."""
+    return growth_fit(t, env, t_lo, t_hi, points)[0]
+
+
+def growth_fit(t: np.ndarray, env: np.ndarray, t_lo: float, t_hi: float,
+               points: int = FIT_POINTS) -> tuple[float, str]:
+    """The growth exponent over [t_lo, t_hi] and, when it is NaN, why.
 
     The fit uses the samples nearest below ``points`` log-spaced times in the window (each sample
     once), so every decade weighs the same however the samples are spaced. Samples with t <= 0 or
     env = 0 (nothing to take the log of) are left out; +inf when the envelope is infinite in the
-    window (the error diverged); NaN with fewer than two usable samples.
+    window (the error diverged); NaN when fewer than :data:`MIN_SAMPLES` usable samples remain or
+    they span less than :data:`MIN_DECADES` decade of t.
     """
     t, env = np.asarray(t, dtype=float), np.asarray(env, dtype=float)
     t_lo = max(t_lo, float(np.min(t[t > 0]))) if np.any(t > 0) else t_lo
     if not (0 < t_lo < t_hi):
-        return float("nan")
+        return float("nan"), "no samples with t > 0 in the fit window"
     inside = (t >= t_lo) & (t <= t_hi)
     if np.any(np.isinf(env[inside])):
-        return float("inf")
+        return float("inf"), ""
     targets = np.geomspace(t_lo, t_hi, points)
     idx = np.unique(np.searchsorted(t, targets, side="right") - 1)
     idx = idx[(idx >= 0) & (t[idx] >= t_lo) & (env[idx] > 0) & np.isfinite(env[idx])]
-    if len(idx) < 2:
-        return float("nan")
-    return float(np.polyfit(np.log(t[idx]), np.log(env[idx]), 1)[0])
+    if len(idx) < MIN_SAMPLES:
+        return float("nan"), (f"{len(idx)} usable samples in the fit window, {MIN_SAMPLES} "
+                              f"needed")
+    span = float(np.log10(t[idx[-1]] / t[idx[0]]))
+    if span < MIN_DECADES:
+        return float("nan"), (f"the samples span t = {t[idx[0]]:.3g} to {t[idx[-1]]:.3g}, "
+                              f"{span:.2f} decades; at least {MIN_DECADES:g} needed")
+    return float(np.polyfit(np.log(t[idx]), np.log(env[idx]), 1)[0]), ""
 
 
 def drift_and_oscillation(t: np.ndarray, err: np.ndarray, t_lo: float,
@@ -120,8 +139,9 @@ def _compute(traj, problem, values) -> MetricOutput:
         out.columns[f"envelope_{name}"] = env
         drift, mean, amplitude = drift_and_oscillation(traj.t, err, t_lo, t_hi)
         early, late, ratio = early_late_maxima(traj.t, err)
+        exponent, why = growth_fit(traj.t, env, t_lo, t_hi)
         out.scalars.update({
-            f"growth_exponent_{name}": growth_exponent(traj.t, env, t_lo, t_hi),
+            f"growth_exponent_{name}": exponent, f"growth_reason_{name}": why,
             f"drift_{name}": drift, f"mean_err_{name}": mean, f"oscillation_{name}": amplitude,
             f"max_early_{name}": early, f"max_late_{name}": late,
             f"late_early_ratio_{name}": ratio})
@@ -179,7 +199,9 @@ growth = Metric(
                   "sample time T", kind="floats", low=0.0, high=1.0)),
     columns=(("envelope_<X>", "max_{s<=t} |err_X(s)| (NaN counts as infinite)"),),
     scalars=(("growth_exponent_<X>", ("least-squares slope of log envelope vs log t over the window "
-                                     "(inf: diverged)")),
+                                     "(inf: diverged; NaN: fewer than 3 samples or less than "
+                                     "0.8 of a decade of t)")),
+             ("growth_reason_<X>", "why growth_exponent_<X> is NaN (\"\" when it is not)"),
              ("drift_<X>", ("slope s of the least-squares line err_X = m + s t over the window, "
                            "per unit time")),
              ("mean_err_<X>", "mean of err_X over the window"),

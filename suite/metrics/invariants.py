@@ -20,6 +20,7 @@ def _absolute(traj, problem, values) -> MetricOutput:
     for k, name in enumerate(traj.integral_names):
         out.columns[f"err_{name}"] = err[:, k]
         out.scalars[f"max_abs_err_{name}"] = max_abs(err[:, k])
+        out.scalars[f"scale_{name}"] = abs(float(traj.H0[k]))
     return out
 
 
@@ -47,7 +48,8 @@ invariant_error = Metric(
     compute=_absolute, needs=("integrals",), default=True,
     columns=(("err_<I>", "I(y(t)) - I(y0)"),),
     scalars=(("max_abs_err_<I>", ("max over the samples of |I(y) - I(y0)|; NaN counts as "
-                                 "infinite")),),
+                                 "infinite")),
+             ("scale_<I>", "|I(y0)|: the scale of a saturated error of I")),
 )
 
 relative_invariant_error = Metric(

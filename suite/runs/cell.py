@@ -22,12 +22,19 @@ class Cell:
     ones), ``reference`` the canonical text of the chosen reference solution (``exact``,
     ``heyoka:precision=...,tol=...``, ``rebound:tol=...`` or ``none``), None for the default (the
     exact solution where the problem has one).
+
+    ``swept``: the base-method options the cell's group sweeps (a work-precision curve runs
+    along them: ``("h",)``, ``("rtol", "atol")`` for a paired sweep), None when the group sweeps
+    none (then the cell's own step or tolerance option, :attr:`sweep`). ``repeat``: how many
+    times its timed integration runs (:mod:`gnibench.suite.runs.cellwork`).
     """
 
     id: int
     group: int
     label: str
     spec: CellSpec
+    swept: tuple[str, ...] | None = None
+    repeat: int = 1
     ensemble: object = None         # an EnsembleSpec (suite/runs/ensembles.py): its orbits
 
     @property
@@ -83,6 +90,29 @@ class Cell:
     def section(self) -> int | None:
         """Crossings of the problem's Poincaré section (suite/cell/sections.py)."""
         return self.spec.section
+
+    @property
+    def sweep(self) -> tuple[str, ...]:
+        """The options along which this cell's family runs: :attr:`swept`, else the first of h
+        (fixed step only), rtol, tol, epsilon the method spec gives (none: an empty tuple)."""
+        if self.swept is not None:
+            return self.swept
+        from gnibench.suite.cell.spec import structure
+
+        given = structure(self.method).base.given
+        adaptive = bool(self.spec.method.base.values.get("adaptive")) or \
+            bool(getattr(self.spec.method.base.record, "adaptive", False))
+        return next(((k,) for k in ("h", "rtol", "tol", "epsilon") if k in given
+                     and not (k == "h" and adaptive)), ())
+
+    @property
+    def setup_method(self) -> str:
+        """The canonical method spec without the options of :attr:`sweep`: with the problem,
+        horizon, sampling and reference, what the cells of one family share
+        (:func:`gnibench.suite.metrics.families.setup_key`)."""
+        from gnibench.suite.cell.spec import structure
+
+        return structure(self.method).without(*self.sweep).text()
 
     def described(self) -> dict:
         """What the tables' metadata records of the cell (and a redraw compares)."""

@@ -83,11 +83,60 @@ def _single(cell, progress) -> CellOutcome:
     from gnibench.suite.runs.tables import cell_row, cell_sample_columns, timing_row
 
     traj = integrate(cell.spec, progress=progress)
+    walls = timed_repeats(cell, traj)
     metrics, skipped = apply(traj, cell.spec.metrics, problem=cell.spec.problem, families=False)
     samples = cell_sample_columns(traj, metrics)
     row = cell_row(cell, traj, metrics, skipped=skipped)
-    return CellOutcome(cell, str(traj.status), traj.reason, samples, row, timing_row(cell, traj),
-                       traj.state_names)
+    return CellOutcome(cell, str(traj.status), traj.reason, samples, row,
+                       timing_row(cell, traj, walls=walls), traj.state_names)
+
+
+class NotRepeatable(RuntimeError):
+    """A repeated integration of a cell gave other results than its first run."""
+
+
+def timed_repeats(cell, traj) -> list[float]:
+    """The wall times of the cell's ``repeat`` timed integrations: the first run's (``traj``)
+    and those of ``repeat - 1`` more runs of the same cell, each after the first run's warm-up
+    (kernels compiled and loaded), without the reference solution (attached once). Every run
+    must give the same samples, counters and status bit for bit; a difference raises
+    :class:`NotRepeatable` (the cell's status is then ``error``, with this line as its reason).
+    A cell that did not end ``ok`` is not repeated (the time of a failed run measures
+    nothing)."""
+    from dataclasses import replace
+
+    from gnibench.suite.cell.driver import integrate
+
+    walls = [traj.wall_seconds]
+    if getattr(cell, "repeat", 1) <= 1 or str(traj.status) != "ok":
+        return walls
+    bare = replace(cell.spec, reference=None, reference_given=False)
+    for k in range(2, cell.repeat + 1):
+        again = integrate(bare)
+        why = difference(traj, again)
+        if why:
+            raise NotRepeatable(f"run {k} of {cell.repeat} differs from the first: {why}; the "
+                                f"integration is not deterministic")
+        walls.append(again.wall_seconds)
+    return walls
+
+
+def difference(a, b) -> str:
+    """What differs between two trajectories of one cell ("" when nothing does): status, sample
+    times, states, counters, section charts."""
+    if str(a.status) != str(b.status):
+        return f"status {a.status} then {b.status}"
+    for name in ("t", "y", "steps", "nfev", "njev", "rejected", "chart"):
+        x, y = getattr(a, name, None), getattr(b, name, None)
+        if x is None and y is None:
+            continue
+        if x is None or y is None or np.shape(x) != np.shape(y):
+            return f"{name} has {np.shape(x)} then {np.shape(y)} values"
+        if not np.array_equal(x, y, equal_nan=True):
+            i = int(np.flatnonzero(~((x == y) | (np.isnan(x) & np.isnan(y))).reshape(
+                len(x), -1).all(axis=1))[0])
+            return f"{name} at sample {i}: {np.ravel(x[i])[:3]} then {np.ravel(y[i])[:3]}"
+    return ""
 
 
 def kernel_plan(cell) -> tuple[str, int]:

@@ -50,6 +50,8 @@ class Experiment:
     scale: str = "paper"
     figure: dict | None = None
     scales: tuple[str, ...] = ("paper",)
+    repeat: int = 1
+    report: dict | None = None
 
 
 def shipped() -> dict[str, str]:
@@ -59,9 +61,11 @@ def shipped() -> dict[str, str]:
             if f.name.endswith(".toml")}
 
 
-def load_experiment(name_or_path: str | Path, scale: str = "paper") -> Experiment:
+def load_experiment(name_or_path: str | Path, scale: str = "paper",
+                    repeat: int | None = None) -> Experiment:
     """Read, validate and expand an experiment given by path or shipped name, at a scale
-    (``paper`` or ``quick``, :mod:`gnibench.suite.runs.scales`)."""
+    (``paper`` or ``quick``, :mod:`gnibench.suite.runs.scales`); ``repeat`` replaces the file's
+    ``repeat`` (``gnibench run --repeat N``)."""
     arg = str(name_or_path)
     path = Path(arg)
     if path.suffix == ".toml" or "/" in arg or path.is_file():
@@ -72,15 +76,16 @@ def load_experiment(name_or_path: str | Path, scale: str = "paper") -> Experimen
         if arg not in known:
             raise unknown("experiment", arg, known)
         text, source, base = known[arg], f"{arg}.toml", None
-    return parse_experiment(text, source, scale, base)
+    return parse_experiment(text, source, scale, base, repeat)
 
 
 def parse_experiment(text: str, source: str, scale: str = "paper",
-                     base: Path | None = None) -> Experiment:
+                     base: Path | None = None, repeat: int | None = None) -> Experiment:
     """Validate an experiment's TOML text at a scale and expand its cells (``source`` names it
     in errors; ``base``: the directory its ``load`` paths are relative to, default the working
-    directory); a ``[figure]`` section is validated against the cells
-    (:mod:`gnibench.suite.runs.figure_spec`)."""
+    directory; ``repeat``: replaces the file's ``repeat``); a ``[figure]`` section is validated
+    against the cells (:mod:`gnibench.suite.runs.figure_spec`), a ``[report]`` section's cell ids
+    and family against the cells."""
     from gnibench.suite.foundation.records import validate
     from gnibench.suite.runs.experiment_schema import ExperimentFile
     from gnibench.suite.runs.scales import at_scale, check_scale, scales_stated
@@ -92,11 +97,12 @@ def parse_experiment(text: str, source: str, scale: str = "paper",
     top = validate(ExperimentFile, at_scale(doc, scale), source)
     _load(top.load, base, source)                # user definitions, before the cells are read
     groups = top.cells
-    planned = sum(_planned_cells(g) for g in groups)
+    repeat = check_repeat(repeat if repeat is not None else (top.repeat or 1), "--repeat")
+    planned = sum(_planned_cells(g, f"{source}: cells[{gi}]") for gi, g in enumerate(groups))
     check_count(planned, f"{source}", "GNIBENCH_MAX_CELLS", "cells")
     cells: list[Cell] = []
     for gi, group in enumerate(groups):
-        cells.extend(_expand(group, gi, top, f"{source}: cells[{gi}]", len(cells)))
+        cells.extend(_expand(group, gi, top, f"{source}: cells[{gi}]", len(cells), repeat))
     seen: dict[tuple, int] = {}
     for c in cells:
         key = (c.problem, c.method, c.steps, c.t_end, c.every, c.dt_out, c.reference, c.section,
@@ -111,8 +117,40 @@ def parse_experiment(text: str, source: str, scale: str = "paper",
 
         figure = parse_figure(top.figure, cells, name=top.name, reference=top.reference,
                               scale=scale, where=f"{source}: figure")
+    report = None
+    if top.report is not None:
+        report = top.report.model_dump(exclude_unset=True)
+        _check_report(report, cells, f"{source}: report")
     return Experiment(top.name, top.title, top.reference, top.description, source, text,
-                      tuple(cells), scale, figure, stated)
+                      tuple(cells), scale, figure, stated, repeat, report)
+
+
+def check_repeat(value, name: str = "repeat") -> int:
+    """A number of timed runs per cell: an integer from 1 to MAX_REPEAT."""
+    from gnibench.suite.runs.report_schema import MAX_REPEAT
+
+    if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= MAX_REPEAT:
+        raise UserError(f"bad {name} {value!r}; allowed: an integer from 1 to {MAX_REPEAT}")
+    return value
+
+
+def _check_report(report: dict, cells: list[Cell], where: str) -> None:
+    """The cell ids and the family of ``[report]`` must name cells of the experiment."""
+    ids = report.get("cells")
+    if isinstance(ids, list):
+        bad = [i for i in ids if i >= len(cells)]
+        if bad:
+            raise UserError(f"{where}: bad cells = {bad[0]}; allowed: cell ids from 0 to "
+                            f"{len(cells) - 1}")
+    family = report.get("family")
+    if family is not None:
+        known = {c.spec.method.base.id for c in cells} | {c.setup_method for c in cells}
+        labels = [getattr(c.spec.method, "family", None) for c in cells]
+        known |= {f().label for f in labels if f is not None}
+        if family not in known:
+            from gnibench.suite.foundation.errors import unknown
+
+            raise UserError(f"{where}: family: {unknown('family', family, sorted(known))}")
 
 
 def _horizon(group: Group, top: ExperimentFile, where: str
@@ -125,12 +163,12 @@ def _horizon(group: Group, top: ExperimentFile, where: str
     return src.steps, src.t_end, every
 
 
-def _planned_cells(group: Group) -> int:
-    """The number of cells a group expands to, counted before expanding it."""
-    n = len(group.problems) * len(group.methods)        # a point set or ensemble: one cell
-    for options in group.vary.values():
-        for values in options.values():
-            n *= len(values)
+def _planned_cells(group: Group, where: str) -> int:
+    """The number of cells a group expands to, counted before expanding it (a point set or an
+    ensemble is one cell; a zip of unequal lists is refused here)."""
+    n = len(group.problems) * len(group.methods)
+    for axis in _axes(group, where):
+        n *= len(axis[1])
     return n
 
 
@@ -157,17 +195,68 @@ def _check_metrics(choices, problems: list, where: str) -> None:
             raise UserError(f"{where}: metric {c.text()} applies to no cell of the group: {why}")
 
 
-def _vary(group: Group) -> tuple[list[tuple[str, str, list[str]]], ...]:
-    """(target, option, [value texts]) triples: target is 'problem', 'method' or a modifier id."""
-    out = [(target, opt, vals) for target, options in group.vary.items()
-           for opt, vals in options.items()]
-    problem_vary = [v for v in out if v[0] == "problem"]
-    method_vary = [v for v in out if v[0] != "problem"]
-    return problem_vary, method_vary
+#: the options of a base method that set its step size or tolerance: a work-precision sweep
+#: varies one of them (the first of these the group varies), with its zip partners
+SWEEP_OPTIONS = ("h", "rtol", "tol", "epsilon", "atol")
 
 
-def _expand(group: Group, gi: int, defaults: ExperimentFile, where: str, first_id: int
-            ) -> list[Cell]:
+def _vary_name(target: str, option: str) -> str:
+    """How a vary key is written: ``rtol`` (the base method's), ``observer.theta``, ``problem.e``."""
+    return option if target == "method" else f"{target}.{option}"
+
+
+def _axes(group: Group, where: str) -> list[tuple[tuple[tuple[str, str], ...], list[tuple]]]:
+    """The group's vary keys as axes of the product: ``((target, option), ...)`` and the value
+    tuples. A key alone is an axis of 1-tuples; the keys of ``zip`` form one axis of their values
+    taken together, in the place of the first of them (their lists must have one length)."""
+    keys = [(target, opt, vals) for target, options in group.vary.items()
+            for opt, vals in options.items()]
+    names = {_vary_name(t, o): (t, o, v) for t, o, v in keys}
+    zipped = list(group.zip or ())
+    for name in zipped:
+        if name.removeprefix("method.") not in names:
+            raise UserError(f"{where}: zip: {name!r} is not a vary key of the group; allowed: "
+                            f"its vary keys ({', '.join(names) or 'none'})")
+    zipped = [names[n.removeprefix("method.")] for n in zipped]
+    if zipped:
+        if len({t == "problem" for t, _, _ in zipped}) > 1:
+            raise UserError(f"{where}: zip mixes problem and method options; allowed: the options "
+                            f"of the problem, or those of the method and its modifiers")
+        lengths = [len(v) for _, _, v in zipped]
+        if len(set(lengths)) > 1:
+            detail = ", ".join(f"vary.{_vary_name(t, o)} has {len(v)}" for t, o, v in zipped)
+            raise UserError(f"{where}: zip = [{', '.join(_vary_name(t, o) for t, o, _ in zipped)}]"
+                            f": lists of unequal length ({detail}); allowed: lists of one length "
+                            f"(the values are taken together, pair by pair)")
+    axes, done = [], False
+    for t, o, v in keys:
+        if (t, o, v) not in zipped:
+            axes.append((((t, o),), [(x,) for x in v]))
+        elif not done:
+            axes.append((tuple((zt, zo) for zt, zo, _ in zipped),
+                         list(zip(*[zv for _, _, zv in zipped]))))
+            done = True
+    return axes
+
+
+def swept_options(group: Group, where: str) -> tuple[str, ...] | None:
+    """The base-method options along which the group's cells form work-precision curves: the
+    first option of :data:`SWEEP_OPTIONS` the group varies, with the options zipped with it; None
+    when the group varies none (each cell's own step or tolerance option is its sweep then)."""
+    for axis, _ in _axes(group, where):
+        methods = [o for t, o in axis if t == "method"]
+        if any(o in SWEEP_OPTIONS for o in methods):
+            break
+    else:
+        return None
+    varied = [o for axis, _ in _axes(group, where) for t, o in axis if t == "method"]
+    first = next(o for o in SWEEP_OPTIONS if o in varied)
+    axis = next(a for a, _ in _axes(group, where) if ("method", first) in a)
+    return tuple([first] + [o for t, o in axis if t == "method" and o != first])
+
+
+def _expand(group: Group, gi: int, defaults: ExperimentFile, where: str, first_id: int,
+            repeat: int = 1) -> list[Cell]:
     from gnibench.suite.metrics.cells import make_cell
     from gnibench.suite.metrics.compute import parse_metrics
 
@@ -190,7 +279,10 @@ def _expand(group: Group, gi: int, defaults: ExperimentFile, where: str, first_i
                             f"them (a section cell writes every crossing)")
     reference = (defaults.reference_solution if group.reference_solution is None
                  else group.reference_solution)
-    problem_vary, method_vary = _vary(group)
+    axes = _axes(group, where)
+    problem_vary = [a for a in axes if a[0][0][0] == "problem"]
+    method_vary = [a for a in axes if a[0][0][0] != "problem"]
+    swept = swept_options(group, where)
     metric_choices = parse_metrics(list(metrics))
     ensemble = None
     if group.points is not None:
@@ -209,7 +301,7 @@ def _expand(group: Group, gi: int, defaults: ExperimentFile, where: str, first_i
             raise UserError(f"{where}: metric {choice.text()} needs of=x/y (the ensemble samples "
                             f"{len(ensemble['options'])} options, not 2)")
     if ensemble is not None:
-        sampled = {t[1] for t in problem_vary} & set(ensemble["options"])
+        sampled = {opt for axis, _ in problem_vary for _, opt in axis} & set(ensemble["options"])
         if sampled:
             raise UserError(f"{where}: vary.problem.{sorted(sampled)[0]} and the ensemble both "
                             f"set it; allowed: one of them")
@@ -217,15 +309,16 @@ def _expand(group: Group, gi: int, defaults: ExperimentFile, where: str, first_i
         modifiers = {mod.id for m in methods for mod in structure(m).modifiers}
     except UserError as e:
         raise UserError(f"{where}: {e}") from None
-    for target, opt, _ in method_vary:
-        if target != "method" and target not in modifiers:
-            raise UserError(f"{where}: vary.{target}.{opt}: no method of the group has the "
-                            f"modifier {target!r}")
+    for axis, _ in method_vary:
+        for target, opt in axis:
+            if target != "method" and target not in modifiers:
+                raise UserError(f"{where}: vary.{target}.{opt}: no method of the group has the "
+                                f"modifier {target!r}")
     cells = []
     parsed_problems = []
     sets: dict[str, object] = {}        # problem spec -> its ensemble (drawn once)
-    for pgiven, *pvals in itertools.product(problems, *[v[2] for v in problem_vary]):
-        for mgiven, *mvals in itertools.product(methods, *[v[2] for v in method_vary]):
+    for pgiven, *pvals in itertools.product(problems, *[v for _, v in problem_vary]):
+        for mgiven, *mvals in itertools.product(methods, *[v for _, v in method_vary]):
             here = f"{where}: {pgiven} {mgiven}"
             try:
                 pspec = _apply(pgiven, problem_vary, pvals)
@@ -242,15 +335,17 @@ def _expand(group: Group, gi: int, defaults: ExperimentFile, where: str, first_i
             except UserError as e:
                 raise UserError(f"{here}: {e}") from None
             parsed_problems.append(spec.problem)
-            cells.append(Cell(first_id + len(cells), gi, label, spec, sets.get(pspec)))
+            cells.append(Cell(first_id + len(cells), gi, label, spec, swept, repeat,
+                              sets.get(pspec)))
     _check_metrics(metric_choices, parsed_problems, where)
     return cells
 
 
-def _apply(spec: str, vary: list, values: list[str]) -> str:
+def _apply(spec: str, axes: list, values: list[tuple]) -> str:
     by_target: dict[str, dict[str, str]] = {}
-    for (target, opt, _), value in zip(vary, values):
-        by_target.setdefault(target, {})[opt] = value
+    for (axis, _), taken in zip(axes, values):
+        for (target, opt), value in zip(axis, taken):
+            by_target.setdefault(target, {})[opt] = value
     for target, options in by_target.items():
         spec = with_options(spec, target, options)
     return spec

@@ -31,6 +31,7 @@ from gnibench.suite.foundation.records import (
     via,
 )
 from gnibench.suite.runs.figure_schema import Figure
+from gnibench.suite.runs.report_schema import MAX_REPEAT, ReportOptions
 from pydantic import AfterValidator, Field, model_validator
 
 MAX_POINTS = 10_000
@@ -110,6 +111,10 @@ def _dt_out(value: float) -> float:
 
 DtOut = Annotated[float, Allowed("a finite number > 0"), AfterValidator(_dt_out)]
 Vary = Annotated[dict[str, Any], Allowed(VARY), Field(max_length=64), AfterValidator(_vary)]
+Zip = Annotated[list[Line], Allowed("a list of at least two distinct vary keys, e.g. [\"rtol\", "
+                                   "\"atol\"] or [\"h\", \"observer.theta\"]"),
+              Field(min_length=2, max_length=16), AfterValidator(_distinct)]
+Repeat = Annotated[int, Allowed(f"an integer from 1 to {MAX_REPEAT}"), Field(ge=1, le=MAX_REPEAT)]
 Pair = Annotated[list[Number], Allowed("two numbers [a, b]"), Field(min_length=2, max_length=2)]
 PointList = Annotated[list[Annotated[list[Number], Field(min_length=1, max_length=16)]],
                       Allowed(f"a list of 1 to {MAX_POINTS} points (lists of numbers, one per "
@@ -282,6 +287,9 @@ class Group(Common):
     methods: Specs = key(doc="METHOD spec strings")
     vary: Vary = key({}, "vary.h = [...] (a base-method option), vary.problem.p0 = [...], "
                          "vary.observer.theta = [...] (a modifier's): one cell per value")
+    zip: Zip | None = key(None, "vary keys that vary together, value by value (a paired sweep, "
+                                "e.g. [\"rtol\", \"atol\"]: rtol = atol = each value), not as a "
+                                "product; their lists must have the same length")
     points: Points | None = key(None, "a set of initial points: one ensemble cell, every "
                                       "orbit's samples kept ([cells.points])")
     ensemble: Ensemble | None = key(None, "N initial conditions in one cell ([cells.ensemble])")
@@ -297,6 +305,12 @@ class Group(Common):
 
 class ExperimentFile(Common):
     """The top level of an experiment file."""
+
+    repeat: Repeat | None = key(None, "each cell's timed integration run N times after the "
+                                      "warm-up (min, median and spread of the wall times in "
+                                      "timings.parquet; results must be identical); default 1")
+    report: ReportOptions | None = key(None, "what the report draws ([report]: time-plot cells, "
+                                             "axes, figures, measures, target accuracy)")
 
     name: Annotated[str, Field(pattern=r"^[A-Za-z0-9][A-Za-z0-9._-]*$", max_length=120)] = key(
         doc="the experiment's name (default output: results/<name>)",

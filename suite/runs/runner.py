@@ -64,7 +64,7 @@ FLUSH_SECONDS = 5.0
 def run_experiment(name_or_path, out_dir=None, *, jobs: int | None = None,
                    executor: str = "local", scheduler: str | None = None, fresh: bool = False,
                    log=None, summarize=None, scale: str = "paper", started=None,
-                   pool=None) -> Path:
+                   pool=None, repeat: int | None = None) -> Path:
     """Run an experiment (shipped name or TOML path); return the output directory.
 
     Parameters
@@ -87,6 +87,9 @@ def run_experiment(name_or_path, out_dir=None, *, jobs: int | None = None,
         every consolidation (None: no summary).
     scale:
         ``paper`` (the file's values) or ``quick`` (its ``[scale.quick]`` overrides).
+    repeat:
+        Timed integrations per cell (replaces the file's ``repeat``; default: the file's, else
+        1): :func:`gnibench.suite.runs.cellwork.timed_repeats`.
     started:
         Called once the experiment and the executor options are valid, before anything is
         written (the command line starts the report's drawing process there).
@@ -96,7 +99,7 @@ def run_experiment(name_or_path, out_dir=None, *, jobs: int | None = None,
         fitted to the cells to compute and used for them; the caller stops it. Default: one is
         started here when needed.
     """
-    experiment = load_experiment(name_or_path, scale)
+    experiment = load_experiment(name_or_path, scale, repeat)
     executors.check(executor, jobs, scheduler)
     if started is not None:
         started()
@@ -317,7 +320,8 @@ def restamp(part: Part | None, cell) -> Part | None:
     get the cell's id when the table is made)."""
     if part is None:
         return None
-    part.row.update(cell=cell.id, group=cell.group, label=cell.label)
+    part.row.update(cell=cell.id, group=cell.group, label=cell.label,
+                    swept="/".join(cell.sweep), setup_method=cell.setup_method)
     part.timing.update(cell=cell.id)
     return part
 
@@ -337,7 +341,7 @@ def provenance(e: Experiment, ndone: int) -> dict:
     """The metadata of the consolidated tables: nothing that depends on the run itself."""
     return {"experiment": e.name, "title": e.title, "reference": e.reference,
             "description": e.description, "source": e.source, "experiment_toml": e.text,
-            "scale": e.scale, "figure": e.figure,
+            "scale": e.scale, "figure": e.figure, "repeat": e.repeat, "report": e.report,
             "versions": versions(), "complete": ndone == len(e.cells), "cells_done": ndone,
             "cells_total": len(e.cells),
             "cells": [c.described() for c in e.cells]}

@@ -98,6 +98,8 @@ def cell_key(cell) -> str:
         doc["section"] = cell.section
     if getattr(cell, "ensemble", None) is not None:      # the orbits of an ensemble's unit
         doc["ensemble"] = cell.ensemble.digest()
+    if getattr(cell, "repeat", 1) > 1:                   # timed N times: another timings row
+        doc["repeat"] = cell.repeat
     spec = getattr(cell, "spec", None)
     defs = [] if spec is None else [r.definition for r in (spec.problem.record,
                                                             spec.method.base.record) if r.definition]

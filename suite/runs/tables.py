@@ -116,8 +116,10 @@ def cell_row(cell, traj=None, metrics=None, status: str = "pending", reason: str
            "dt_out": np.nan if cell.dt_out is None else cell.dt_out,
            "section": getattr(cell, "section", None) or 0, "status": status, "reason": reason,
            "steps": None, "t_final": np.nan, "nfev": np.nan, "njev": np.nan, "samples": None,
-           "integrals": "", "reference": getattr(cell, "reference", None) or "",
+           "integrals": "", "reference": _reference_text(cell),
            "metrics": join_metrics(cell.metrics), "metric_notes": notes,
+           "swept": "/".join(getattr(cell, "sweep", ())),
+           "setup_method": getattr(cell, "setup_method", cell.method),
            "final_global_error": np.nan, "max_global_error": np.nan}
     if traj is None:
         return row
@@ -135,13 +137,33 @@ def cell_row(cell, traj=None, metrics=None, status: str = "pending", reason: str
     return row
 
 
-def timing_row(cell, traj=None, status: str = "pending") -> dict:
+def _reference_text(cell) -> str:
+    """What a cell's global error is measured against, as its trajectory states it (the
+    resolved reference's spec, ``exact`` for the default exact solution): the same text for a
+    cell that has not run or failed as for one that ran, so that both are of one setup."""
+    spec = getattr(cell, "spec", None)
+    ref = getattr(spec, "reference", None) if spec is not None else None
+    if ref is not None and hasattr(ref, "text"):
+        return ref.text()
+    return getattr(cell, "reference", None) or ""
+
+
+def timing_row(cell, traj=None, status: str = "pending", walls: list[float] | None = None
+               ) -> dict:
+    """The timings row of one cell: ``wall_seconds`` the fastest of its ``repeats`` timed
+    integrations, ``wall_median_seconds`` their median, ``wall_spread`` (max - min) / median
+    (0 for one run)."""
     row = {"cell": cell.id, "problem": cell.problem, "method": cell.method, "status": status,
-           "wall_seconds": np.nan, "compile_seconds": np.nan, "cache_misses": None}
+           "wall_seconds": np.nan, "compile_seconds": np.nan, "cache_misses": None,
+           "repeats": 0, "wall_median_seconds": np.nan, "wall_spread": np.nan}
     if traj is not None:
-        row.update(status=str(traj.status), wall_seconds=traj.wall_seconds,
+        walls = np.asarray(walls if walls else [traj.wall_seconds], dtype=float)
+        median = float(np.median(walls))
+        row.update(status=str(traj.status), wall_seconds=float(walls.min()),
                    compile_seconds=traj.compile_seconds,
-                   cache_misses=traj.provenance.get("numba_cache_misses"))
+                   cache_misses=traj.provenance.get("numba_cache_misses"), repeats=len(walls),
+                   wall_median_seconds=median,
+                   wall_spread=float(np.ptp(walls) / median) if median > 0 else 0.0)
     return row
 
 
@@ -195,7 +217,7 @@ CELL_COLUMNS = ("cell", "group", "label", "problem", "method", "problem_id", "ba
                 "modifiers", "method_kind", "family", "sweep", "sweep_value", "adaptive", "h",
                 "t_end", "steps_planned", "every", "dt_out", "section", "status", "reason", "steps",
                 "t_final", "nfev", "njev", "samples", "integrals", "reference", "metrics",
-                "metric_notes")
+                "metric_notes", "swept", "setup_method")
 
 
 def cells_table(rows: list[dict]) -> pd.DataFrame:
@@ -219,7 +241,8 @@ def timings_table(rows: list[dict]) -> pd.DataFrame:
     import pandas as pd
 
     columns = ("cell", "problem", "method", "status", "wall_seconds", "compile_seconds",
-               "cache_misses")
+               "cache_misses", "repeats", "wall_median_seconds", "wall_spread")
     df = pd.DataFrame(sorted(rows, key=lambda r: r["cell"]), columns=list(columns))
     df["cache_misses"] = df["cache_misses"].astype("Int64")
+    df["repeats"] = df["repeats"].fillna(0).astype("int64")
     return df

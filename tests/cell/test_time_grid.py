@@ -15,6 +15,7 @@ from gnibench.methods import COMPILED
 from gnibench.suite.cell import driver
 from gnibench.suite.cell.solve import solve
 from gnibench.suite.cli.main import main
+from support import per_family
 from gnibench.suite.foundation.errors import UserError
 from gnibench.suite.metrics.global_error import global_errors
 from gnibench.suite.runs.experiment import parse_experiment
@@ -72,7 +73,7 @@ def _fixed_spec(mid: str, h: float) -> str:
             + ("sum=plain," if "sum" in names else "") + f"h={h!r}")
 
 
-@pytest.mark.parametrize("mid", sorted(COMPILED))
+@pytest.mark.parametrize("mid", per_family(sorted(COMPILED)))
 def test_every_compiled_method_samples_by_its_own_step(mid):
     """Registry-wide: h = 0.03, dt_out = 0.1: the samples at t = 0.1, 0.2 are one step of the
     method itself (fixed-step mode) of size t_k - t_n from the accepted point y_n, bit for bit;

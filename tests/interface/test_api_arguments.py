@@ -99,3 +99,15 @@ def test_values_are_checked_below_with_the_command_line_s_words():
         gnibench.run(E, jobs=0)
     with pytest.raises(gnibench.UserError, match=r"^bad --executor 'spark'"):
         gnibench.run(E, executor="spark")
+
+
+@pytest.mark.parametrize("ids", [[], ""])
+@pytest.mark.parametrize("name", ["verify", "reproduce"])
+def test_an_empty_id_list_is_refused_not_taken_for_all(name, ids, tmp_path):
+    """``verify(ids=[])`` ran all 166 cells of the ledger (an empty selection read as none
+    given): an empty list or string is one line, before any work; "all" says every one."""
+    import gnibench
+
+    with pytest.raises(gnibench.UserError, match=rf"gnibench\.{name}: bad ids .* \(empty\)"):
+        getattr(gnibench, name)(ids, output=tmp_path / "out")
+    assert not (tmp_path / "out").exists()

@@ -9,8 +9,18 @@ import re
 import gnibench
 import pytest
 
-PUBLIC = list(gnibench.__all__)
-FUNCTIONS = [n for n in PUBLIC if inspect.isfunction(getattr(gnibench, n))]
+PUBLIC = list(gnibench.__all__) + [f"plot.{n}" for n in gnibench.plot.__all__]
+
+
+def _get(name: str):
+    """A public name of gnibench, dotted names (``plot.work_precision``) included."""
+    obj = gnibench
+    for part in name.split("."):
+        obj = getattr(obj, part)
+    return obj
+
+
+FUNCTIONS = [n for n in PUBLIC if inspect.isfunction(_get(n))]
 
 
 def _sections(doc: str) -> set[str]:
@@ -19,11 +29,11 @@ def _sections(doc: str) -> set[str]:
 
 @pytest.mark.parametrize("name", PUBLIC)
 def test_every_public_name_has_an_example(name):
-    doc = inspect.getdoc(getattr(gnibench, name)) or ""
+    doc = inspect.getdoc(_get(name)) or ""
     sections = _sections(doc)
     assert "Examples" in sections and ">>> " in doc.split("Examples")[1], name
     if name in FUNCTIONS:
-        need = {"Returns"} | ({"Parameters"} if inspect.signature(getattr(gnibench, name)).parameters
+        need = {"Returns"} | ({"Parameters"} if inspect.signature(_get(name)).parameters
                               else set())
         assert need <= sections, (name, sections)
         if name not in ("list_problems", "list_methods", "list_metrics"):
@@ -44,7 +54,7 @@ def test_the_examples_run(name, tmp_path, monkeypatch):
 
     monkeypatch.chdir(tmp_path)
     before = set(loaded())
-    tests = _examples(getattr(gnibench, name))
+    tests = _examples(_get(name))
     assert tests, name
     runner = doctest.DocTestRunner(optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
     try:

@@ -135,7 +135,8 @@ def test_csv_columns_and_values(capsys, tmp_path):
                           "-o", str(out_path)], capsys)
     assert code == 0 and err == "" and out == ""
     df = pd.read_csv(out_path)
-    assert list(df.columns) == ["t", "q", "p", "err_H", "global_error", "steps", "nfev"]
+    assert list(df.columns) == ["t", "q", "p", "err_H", "global_error", "steps", "nfev",
+                               "reference_error"]
     _osc_check(df, 0.01, 250, 20)
 
 
@@ -161,7 +162,8 @@ def test_csv_columns_every_problem(pid, capsys):
     assert code == 0, err
     cols = out.splitlines()[0].split(",")
     want = (["t", *rec.state] + [f"err_{n}" for n in problem_meta(rec)["integrals"]]
-            + (["global_error"] if rec.exact is not None else []) + ["steps", "nfev"])
+            + (["global_error"] if rec.exact is not None else []) + ["steps", "nfev"]
+            + (["reference_error"] if rec.exact is not None else []))
     assert cols == want
 
 
@@ -179,7 +181,8 @@ def test_json_meta(capsys, tmp_path):
         assert isinstance(meta[key], float) and meta[key] >= 0
     assert {"gnibench", "python", "numpy", "numba"} <= set(meta["versions"])
     df = pd.DataFrame(doc["columns"])
-    assert list(df.columns) == ["t", "q", "p", "err_H", "global_error", "steps", "nfev"]
+    assert list(df.columns) == ["t", "q", "p", "err_H", "global_error", "steps", "nfev",
+                               "reference_error"]
     # the observer does not change the exact solution on the level set ([B] (2.5) reduces to (2.1))
     _osc_check(df, 0.01, 250, 20)
 

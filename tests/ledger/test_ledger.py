@@ -196,3 +196,25 @@ def test_list_and_bad_input(capsys):
     assert main(["verify", "B-4.2-x"]) == 2
     assert "did you mean" in capsys.readouterr().err
     assert main(["verify", "--scale", "huge"]) == 2
+
+
+def test_one_sided_criteria_say_why():
+    """Every entry whose pass criterion bounds a measured number on one side only says why in
+    ``one_sided`` (the seed gives no other side), and no two-sided entry carries a stale reason
+    (issue 41). The detector itself: both sides, abs(), equalities and orders are two-sided."""
+    from gnibench.suite.ledger.entries import load_ledger
+    from gnibench.suite.ledger.sides import one_sided_terms
+
+    assert one_sided_terms("measured >= 10") == ["measured"]
+    assert one_sided_terms("0.1 <= measured <= 10") == []
+    assert one_sided_terms("x >= 1 and x <= 2 and abs(a - 1) <= 0.2 and n == 3") == []
+    assert one_sided_terms("ee2 < ee1 and ee1 < 0 and g >= 0.1") == ["g"]
+    assert one_sided_terms("measured >= 2 and exp(0.69) < 2") == ["measured"]
+    missing, stale = [], []
+    for c in load_ledger().values():
+        terms = one_sided_terms(c.passes)
+        if terms and not c.one_sided:
+            missing.append(f"{c.id}: {terms}")
+        if c.one_sided and not terms:
+            stale.append(c.id)
+    assert not missing and not stale, (missing, stale)

@@ -1,7 +1,8 @@
-"""Mutation testing of the ledger (suite/ledger/mutants.py): the catalog is valid, a mutant is
-applied to a copy only (never to the installed tree), and the machinery kills one at quick scale.
-The full run (every mutant, the whole ledger and the catalog's tests) is the slow command
-``gnibench verify --mutants`` (README, "Mutation testing")."""
+"""Mutation testing of the verification (suite/ledger/mutants.py): the catalog is valid, a mutant
+is applied to a copy only (never to the installed tree), the tests run against a mutant are those
+whose imports reach its file (suite/ledger/importers.py), time limits follow the baseline, and the
+machinery kills one at quick scale. The full run (every mutant, the whole ledger and the tests) is
+the slow command ``gnibench verify --mutants`` (docs/how-to/mutation-testing.md)."""
 from __future__ import annotations
 
 import json
@@ -15,7 +16,7 @@ from gnibench.suite.ledger import mutants as M
 
 def test_the_catalog_applies_and_covers_the_asked_categories():
     catalog, settings = M.load_catalog()
-    assert len(catalog) >= 25
+    assert len(catalog) >= 25 and settings == {}
     problems = [p for p in (M.check(m) for m in catalog) if p]
     assert not problems, problems
     files = {m.file for m in catalog}
@@ -26,8 +27,6 @@ def test_the_catalog_applies_and_covers_the_asked_categories():
         assert needed in files, needed
     for m in catalog:
         assert m.description and m.plausible, m.id
-    for test in settings["tests"]:
-        assert (M.package_root() / test).is_file(), test
 
 
 def test_a_snippet_must_occur_exactly_once(tmp_path):
@@ -118,3 +117,79 @@ def test_held_out_mutants_from_a_file(tmp_path, capsys):
         assert main(["verify", "--mutants", arg, "-o", str(out)]) == 2
         err = capsys.readouterr().err
         assert why in err and len(err.strip().splitlines()) == 1 and not out.exists()
+
+
+def test_a_hand_kept_test_list_is_refused():
+    """The tests run against a mutant are computed from the imports, never listed by hand."""
+    with pytest.raises(UserError, match=r"unknown top-level keys \['tests'\]"):
+        M.load_catalog('tests = ["tests/x.py"]\n', "held.toml")
+
+
+def test_the_tests_that_see_a_file_are_its_importers_nearest_first():
+    """The reverse import graph: a module's own test first, then those reaching it through other
+    modules (lazy imports inside functions count); the issue's three missed tests are selected for
+    the files they check; a data file is seen by every test; conftest.py is not a test module."""
+    from gnibench.suite.ledger import importers as I
+
+    root = M.package_root()
+    every = I.all_test_files(root)
+    assert len(every) > 50 and "tests/conftest.py" not in every
+    assert all(t.startswith("tests/") and "/test_" in t for t in every)
+    for file, test in [("suite/cell/reference.py", "tests/cell/test_reference.py"),
+                       ("suite/metrics/pericenter.py", "tests/metrics/test_metric_precession.py"),
+                       ("methods/scipy_methods.py", "tests/methods/test_scipy_engine.py"),
+                       ("suite/runs/store.py", "tests/runs/test_runner_store.py"),
+                       ("methods/lie_poisson.py", "tests/methods/test_lie_poisson.py")]:
+        seen = I.tests_seeing(root, file)
+        assert test in seen, (file, test)
+        assert set(seen) <= set(every) and len(seen) < len(every), file
+    dist = I.importers(I.import_graph(str(root)), "gnibench.methods.lie_poisson")
+    seen = I.tests_seeing(root, "methods/lie_poisson.py")
+    assert seen[0] == "tests/methods/test_lie_poisson.py" and dist[seen[0]] == 1
+    assert [dist[t] for t in seen] == sorted(dist[t] for t in seen)
+    assert I.tests_seeing(root, "suite/claims/b-2.toml") == every
+    # a function-local import is an edge (the package imports lazily)
+    assert "gnibench.suite.api" in I.import_graph(str(root))["gnibench"]
+    assert I.module_of("tests/support.py") == "support"
+    assert I.module_of("suite/runs/__init__.py") == "gnibench.suite.runs"
+
+
+def test_time_limits_kill_only_when_the_baseline_is_fast():
+    """A phase may run FACTOR times the baseline's time plus SLACK; an overrun kills only when the
+    campaign's cap did not cut that limit (a slow baseline makes a timeout inconclusive)."""
+    from gnibench.suite.ledger import mutant_runs as R
+
+    assert R.limit(10.0, 3600.0) == (R.FACTOR * 10.0 + R.SLACK, True)
+    assert R.limit(1000.0, 3600.0) == (3600.0, False)
+    assert R.limit(None, 3600.0) == (3600.0, False)
+    raw = {"rows": [{"id": "a", "unexpected": False}], "exit": 0, "stderr": "",
+           "tests_failed": [], "timeouts": [], "inconclusive": ["tests: timed out"]}
+    base = {"rows": [{"id": "a", "unexpected": False}]}
+    assert not M.judge_mutant(raw, base)["killed"]
+    assert M.judge_mutant({**raw, "timeouts": ["tests: timed out"]}, base)["killed"]
+    # the ledger not run (a test killed the mutant first) is no crash
+    assert not M.judge_mutant({**raw, "exit": None, "rows": [], "inconclusive": []}, base)["killed"]
+    files = ["tests/a.py", "tests/b.py"]
+    assert R.estimate(files, {"tests/a.py": 40.0, "tests/b.py": 20.0}, 2) == 30.0 + R.PYTEST_START
+    assert R.estimate(files, {}, 2) is None
+    assert R.tiers(["x", "y", "z"], {"x": 1, "y": 2, "z": 5}) == [["x"], ["y"], ["z"]]
+    assert R.tiers(list("abcdef"), dict(zip("abcdef", range(1, 7))), most=3) == [
+        ["a"], ["b"], ["c", "d", "e", "f"]]
+
+
+def test_a_test_that_sees_the_mutant_kills_it(tmp_path):
+    """A mutant of a metric that the chosen claim does not read survives the ledger and is killed
+    by a test module whose imports reach the metric; the failing test passes on the baseline's
+    copy (the kill is confirmed there)."""
+    bug = M.Mutant("final-is-max", "suite/metrics/global_error.py",
+                   '"final_global_error": float(g[-1])', '"final_global_error": float(np.max(g))',
+                   "final = max", "p")
+    doc = M.run_mutants([bug], tmp_path, scale="quick", jobs=1, claims=["HLW-1.2-d"],
+                        tests=["tests/metrics/test_metric_meanings.py"], log=lambda s: None)
+    (row,) = doc["mutants"]
+    assert row["killed"] and row["tests"] and not row["claims"], row
+    assert row["tests"][0].startswith("tests/metrics/test_metric_meanings.py::"), row["tests"]
+    assert doc["baseline"]["tests_failing"] == []
+    # the test reaches the metric through suite/metrics/compute.py (distance 2): the ledger runs
+    # first, does not kill it, and the test phase does
+    assert [p["phase"] for p in row["phases"]] == ["ledger", "tests (1 files)"]

@@ -25,8 +25,10 @@ SOLVERS = {"rk45": "RK45", "rk23": "RK23", "dop853": "DOP853", "radau": "Radau",
            "lsoda": "LSODA"}
 
 
-def direct(problem: str, solver: str, t_eval, tol: float, with_jac: bool, t_end=None):
-    """solve_ivp called as a user would, on the problem's compiled field (and Jacobian)."""
+def direct(problem: str, solver: str, t_eval, tol: float, with_jac: bool, t_end=None,
+           atol: float | None = None):
+    """solve_ivp called as a user would, on the problem's compiled field (and Jacobian), with
+    rtol = tol and atol = tol (or ``atol``)."""
     bound, _ = prepare(problem, "rk4")
     pk = problem_kernel(bound)
     f, J, par = pk.kernel.base_f, pk.kernel.base_jac, pk.par
@@ -42,7 +44,8 @@ def direct(problem: str, solver: str, t_eval, tol: float, with_jac: bool, t_end=
     t_end = t_eval[-1] if t_end is None else t_end
     with threadpool_limits(1, user_api="blas"):      # as the engine runs (Radau's LU rounds
         return solve_ivp(lambda t, y: f(tuple(y), par), (0.0, t_end), y0,    # by thread count)
-                         method=solver, t_eval=t_eval, rtol=tol, atol=tol, **kw)
+                         method=solver, t_eval=t_eval, rtol=tol,
+                         atol=tol if atol is None else atol, **kw)
 
 
 def test_dop853_is_solve_ivp_on_kepler():
@@ -140,11 +143,12 @@ def test_every_work_precision_experiment_has_the_six_solvers():
 
 def test_work_precision_report_shows_the_solvers(tmp_path):
     """A tiny work-precision run: scipy's DOP853 beside ours, ranked by nfev in the league table,
-    drawn as an adaptive external engine (triangles) on the nfev and wall-time panels."""
+    a family of its own with its own colour and marker on the nfev and wall-time panels."""
     import re
 
     import pandas as pd
     from gnibench.reports.palette import styles
+    from gnibench.reports.setups import add_setups
     from gnibench.reports.site import build_site
     from gnibench.suite.runs.runner import run_experiment
 
@@ -161,8 +165,13 @@ def test_work_precision_report_shows_the_solvers(tmp_path):
     ours = cells[cells["family"] == "scipy-dop853"]
     assert len(ours) == 2 and ours["adaptive"].all() and (ours["method_kind"] == "external").all()
     assert (ours["sweep"] == "rtol").all() and ours["nfev"].notna().all()
-    style = styles(cells)
-    assert style["scipy-dop853"]["marker"] == "^" and style["dop853"]["marker"] == "o"
+    families = add_setups(cells)
+    style = styles(families)
+    first = families.drop_duplicates("setup")
+    assert list(first["family"]) == ["dop853", "scipy-dop853"]
+    ours_style, scipy_style = (style[int(s)] for s in first["setup"])
+    assert ours_style["color"] != scipy_style["color"]
+    assert ours_style["marker"] != scipy_style["marker"]
     build_site([out], tmp_path / "site", thresholds=(1e-6,))
     html = (tmp_path / "site" / "wp-tiny-scipy.html").read_text()
     rows = re.findall(r"<tr>\s*<td>([^<]*)</td><td><code>([^<]*)</code></td>", html)

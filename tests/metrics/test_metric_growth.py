@@ -24,6 +24,7 @@ from gnibench.suite.metrics.growth import (
     early_late_maxima,
     envelope,
     growth_exponent,
+    growth_fit,
 )
 from support import synthetic_trajectory
 
@@ -49,6 +50,27 @@ def test_exponent_edge_cases():
         t, np.zeros_like(t), 0.1, 10.0)                                     # NaN: nothing to fit
     env = envelope(np.where(t > 5, np.nan, t))
     assert growth_exponent(t, env, 0.1, 10.0) == math.inf                   # diverged in the window
+
+
+def test_no_exponent_over_less_than_a_decade():
+    """A slope of log envelope against log t over [0.3 T, T] says nothing about t^p: NaN and why;
+    over a decade (0.8 of one at least) and three samples there is one."""
+    t = np.linspace(0.0, 10.0, 11)
+    env = envelope(t ** 2)
+    p, why = growth_fit(t, env, 3.0, 10.0)
+    assert math.isnan(p) and why == ("the samples span t = 3 to 10, 0.52 decades; at least 0.8 "
+                                     "needed")
+    p, why = growth_fit(t, env, 1.0, 10.0)
+    assert abs(p - 2) < 1e-12 and why == ""
+    p, why = growth_fit(np.array([0.0, 5.0, 10.0]), np.array([0.0, 1.0, 2.0]), 0.1, 10.0)
+    assert math.isnan(p) and why == "2 usable samples in the fit window, 3 needed"
+
+
+def test_the_metric_says_why_there_is_no_exponent():
+    traj = solve("harmonic-oscillator", "euler:h=0.5", steps=20, every=10)
+    metrics, _ = apply(traj, parse_metrics(["growth:of=H"]))
+    assert math.isnan(metrics.scalars["growth_exponent_H"])
+    assert metrics.scalars["growth_reason_H"] == ("2 usable samples in the fit window, 3 needed")
 
 
 def test_drift_and_oscillation_of_a_line_plus_a_sine():

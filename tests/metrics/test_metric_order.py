@@ -15,7 +15,7 @@ import pandas as pd
 import pytest
 from gnibench.suite.cli.main import main
 from gnibench.suite.foundation.errors import UserError
-from gnibench.suite.metrics.families import family_columns, method_without_step
+from gnibench.suite.metrics.families import family_columns, method_without_step, setups
 from gnibench.suite.metrics.order import FIT, observed_order, order_points
 from gnibench.suite.runs.experiment import parse_experiment
 
@@ -75,9 +75,67 @@ def test_family_columns_on_known_orders():
     assert (rk4["order_family"] == 5).all() and (rk4["order_points_global"] == 3).all()
     assert np.allclose(rk4["order_global"], 8.0, atol=1e-9)          # 1e-15 is below the plateau
     assert rk4["order_used_global"].tolist() == [True, True, True, False, False]
-    assert np.allclose(rk4["order_H"], 9.0, atol=1e-9)               # err_H = 2 h^8 * h
+    assert (rk4["order_reason_global"] == "").all()
+    # err_H = 2 h^8 * h: two points above the plateau, not three: no order from two points
+    assert rk4["order_H"].isna().all() and (rk4["order_points_H"] == 2).all()
+    assert (rk4["order_reason_H"] == "2 of 5 points in the asymptotic regime, 3 needed (3 below "
+            "the round-off plateau 1e-13)").all()
     assert math.isnan(out.loc[10, "order_global"]) and out.loc[10, "order_points_global"] == 1
+    assert out.loc[10, "order_reason_global"].startswith("1 of 1 points")
     assert pd.isna(out.loc[12, "order_family"])
+
+
+def test_no_order_from_saturated_errors_or_below_the_reference():
+    """An error of the order of the solution (the trajectory lost) and an error at or below the
+    reference's own accuracy are not in the asymptotic regime: the issue's order 3.81 from two
+    errors of 474 and 34 is NaN with its reason."""
+    hs = [0.1 / 2**k for k in range(5)]
+    rows = [(k, "rk4", h, 1.0, "ok", e, "order") for k, (h, e) in
+            enumerate(zip(hs, [474.0, 34.0, 2.0, 0.1, 0.006]))]
+    cells, samples = _tables(rows)
+    cells["solution_size"] = 1.5
+    out = family_columns(cells, samples).set_index("cell")
+    assert out["order_global"].isna().all()
+    assert out["order_reason_global"].iloc[0] == ("2 of 5 points in the asymptotic regime, 3 "
+                                                   "needed (3 saturated)")
+    cells["solution_size"] = 1e4                               # the same errors, not saturated
+    assert family_columns(cells, samples)["order_global"].notna().all()
+    cells, samples = _tables([(k, "rk4", h, 1.0, "ok", 1e-3 * h**4 / 1e-4, "order")
+                              for k, h in enumerate(hs)])
+    cells["max_reference_error"] = 1e-6                         # the two finest are below it
+    out = family_columns(cells, samples).set_index("cell")
+    assert np.allclose(out["order_global"], 4.0) and (out["order_points_global"] == 3).all()
+    cells["max_reference_error"] = 1e-5
+    out = family_columns(cells, samples).set_index("cell")
+    assert out["order_global"].isna().all()
+    assert "3 below the reference's accuracy" in out["order_reason_global"].iloc[0]
+
+
+def test_families_are_setups():
+    """A family holds one setup only: another horizon, another atol (an option not swept),
+    another sampling or reference make another family; a family that sweeps rtol has no order
+    in h."""
+    base = {"problem": "kepler-2d", "t_end": 1.0, "h": 0.1, "steps_planned": 10, "every": 1,
+            "dt_out": np.nan, "section": 0, "reference": "", "status": "ok", "metrics": "order"}
+    rows = [{**base, "cell": 0, "method": "dopri5:rtol=1e-4", "setup_method": "dopri5",
+             "swept": "rtol"},
+            {**base, "cell": 1, "method": "dopri5:rtol=1e-6", "setup_method": "dopri5",
+             "swept": "rtol"},
+            {**base, "cell": 2, "method": "dopri5:rtol=1e-6", "setup_method": "dopri5",
+             "swept": "rtol", "t_end": 10.0},
+            {**base, "cell": 3, "method": "dopri5:rtol=1e-6,atol=1e-9",
+             "setup_method": "dopri5:atol=1e-9", "swept": "rtol"},
+            {**base, "cell": 4, "method": "dopri5:rtol=1e-8", "setup_method": "dopri5",
+             "swept": "rtol", "every": 10},
+            {**base, "cell": 5, "method": "dopri5:rtol=1e-8", "setup_method": "dopri5",
+             "swept": "rtol", "reference": "heyoka:precision=double,tol=1e-15"}]
+    cells = pd.DataFrame(rows)
+    assert setups(cells).tolist() == [0, 0, 2, 3, 4, 5]
+    samples = pd.DataFrame([{"cell": c, "t": t, "global_error": 1e-3 / (c + 1)}
+                            for c in range(6) for t in (0.0, 1.0)])
+    out = family_columns(cells, samples).set_index("cell")
+    assert out.loc[0, "order_reason_global"].startswith("the family sweeps rtol, not h")
+    assert out["order_family"].tolist() == [0, 0, 2, 3, 4, 5]
 
 
 def test_unfinished_family_gets_no_values_yet():

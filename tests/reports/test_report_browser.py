@@ -1,7 +1,10 @@
 """The report in a real browser: headless Chromium (Debian's chromium and chromium-driver, driven by
 selenium) opens every page of a generated site from disk (file://) and checks that it renders (a
 screenshot that is not blank), that every image and link inside the site resolves to an existing
-file (and every image decodes), and that the console has no errors.
+file (and every image decodes), and that the console has no errors; that the interactive
+work-precision diagrams draw from ``file://`` with no network (plotly.js copied into the site),
+show a point's cell on hover and hide a family from every panel when its legend entry is
+clicked; and that hostile strings stay text, in the page and in the hover text.
 
 Skipped only when Chromium or its driver is not installed (``.ci/run`` installs them with apt-get),
 with a loud message. ``GNIBENCH_SCREENSHOTS=DIR`` keeps the screenshots for a reviewer to look at.
@@ -25,7 +28,7 @@ CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
 DRIVER = shutil.which("chromedriver") or "/usr/bin/chromedriver"
 FLAGS = ("--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
          "--disable-background-networking", "--disable-component-update", "--disable-sync",
-         "--hide-scrollbars", "--window-size=1300,1000")
+         "--hide-scrollbars", "--window-size=1400,1000")
 
 
 @pytest.fixture(scope="module")
@@ -91,7 +94,7 @@ def test_page_renders_with_resolving_links_and_no_console_errors(browser, site, 
     browser.get_log("browser")       # drop messages of earlier pages
     browser.refresh()
     height = browser.execute_script("return document.documentElement.scrollHeight")
-    browser.set_window_size(1300, min(max(height, 600), 8000))
+    browser.set_window_size(1400, min(max(height, 600), 8000))
     png = browser.get_screenshot_as_png()
     keep = os.environ.get("GNIBENCH_SCREENSHOTS")
     if keep:
@@ -123,7 +126,57 @@ def test_page_renders_with_resolving_links_and_no_console_errors(browser, site, 
 
 def test_hostile_strings_do_not_become_markup(browser, site):
     browser.get((site / "hostile.html").as_uri())
-    assert browser.find_elements("tag name", "script") == []
+    scripts = browser.find_elements("tag name", "script")
+    sources = {s.get_attribute("src") or s.get_attribute("type") or "inline" for s in scripts}
+    assert sources == {(site / "assets" / "plotly.min.js").as_uri(), "application/json",
+                       "inline"}, sources
+    assert len([s for s in scripts if not s.get_attribute("src")
+                and not s.get_attribute("type")]) == 1          # ours: hands the JSON to plotly
     h1 = browser.find_element("tag name", "h1").text
     assert h1.startswith("<script>alert('t')</script>")            # shown as text
     assert not browser.find_elements("css selector", "img[src='x']")
+    assert browser.execute_script("return window.alerted === undefined")
+
+
+def test_interactive_work_precision_hover_and_toggle(browser, site):
+    """The plotly diagram of the hostile page: drawn offline, one trace group per family across
+    its panels; hovering a point names its cell, spec, error, nfev and wall time (the spec as
+    text); clicking the first family's legend entry hides it in every panel, clicking again
+    shows it; no console errors."""
+    import time
+
+    from selenium.webdriver.common.action_chains import ActionChains
+
+    browser.set_window_size(1400, 1200)
+    browser.get((site / "hostile.html").as_uri())
+    browser.get_log("browser")
+    browser.refresh()
+    div = browser.find_elements("css selector", ".wp-plot")[0]
+    assert browser.execute_script("return window.Plotly !== undefined && "
+                                  "arguments[0].data.length > 0", div)
+    browser.execute_script("arguments[0].scrollIntoView()", div)
+    points = div.find_elements("css selector", "g.points path.point")
+    assert points
+    ActionChains(browser).move_to_element(points[0]).perform()
+    time.sleep(0.5)
+    hover = " ".join(h.text for h in div.find_elements("css selector", "g.hovertext"))
+    assert "cell" in hover and "nfev" in hover and "wall" in hover and "error" in hover, hover
+    keep = os.environ.get("GNIBENCH_SCREENSHOTS")
+    if keep:
+        (Path(keep) / "hover.png").write_bytes(browser.get_screenshot_as_png())
+    groups = browser.execute_script(
+        "return arguments[0].data.map(t => t.legendgroup)", div)
+    first = groups[0]
+    assert groups.count(first) >= 2                             # one trace per panel
+    div.find_elements("css selector", "g.legend g.traces")[0].click()
+    time.sleep(0.5)
+    hidden = browser.execute_script(
+        "return arguments[0].data.filter(t => t.visible === 'legendonly').map(t => t.legendgroup)",
+        div)
+    assert hidden and set(hidden) == {first} and len(hidden) == groups.count(first)
+    div.find_elements("css selector", "g.legend g.traces")[0].click()
+    time.sleep(0.5)
+    assert not browser.execute_script(
+        "return arguments[0].data.filter(t => t.visible === 'legendonly').length", div)
+    errors = [e for e in browser.get_log("browser") if e["level"] in ("SEVERE", "ERROR")]
+    assert not errors, errors

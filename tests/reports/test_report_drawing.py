@@ -165,67 +165,45 @@ def test_a_figure_that_cannot_be_written_is_one_line(tmp_path, workers):
     assert str(gone) in str(caught.value) and "\n" not in str(caught.value)
 
 
-@pytest.mark.parametrize("label", [
-    "c19 stormer-verlet:h=0.05  t^0.23",
-    "c31 rk4:h=0.05+observer:mode=simple,on=H/L,theta=1/1  t^0.08",
-    "c7 implicit-midpoint:h=0.05,fixed_point=500+penalty:mode=simple,on=H/L/A1/A2,theta=1000/1000"
-    "  t^0.08",
-    "c120 mmm-www:h=0.05+mmmm:www=mmmmmm,on=WWW/MMM,mmmmm=1000/1000/1000/1000  t^0.08",
+@pytest.mark.parametrize("label, n", [
+    ("rk4 h=0.1 [3]  t^1.02", 3), ("dop853 (T = 17.0652; atol swept) rtol=atol=1e-07 [1]", 12),
+    ("m" * 64, 24), ("W" * 80, 2),
 ])
-def test_a_time_figure_is_as_wide_as_its_legend_needs(tmp_path, label):
-    """A one-column time-series figure (reports/plots.py ``_grid``): the legend is not cut by
-    the figure's right edge (white margin left in the PNG), and a short label leaves no wide
-    empty column (the figure narrower than the fixed 13 in of before)."""
-    from gnibench.reports.plots import _grid
+def test_a_figure_is_as_wide_as_the_page_with_its_legend_below_uncut(tmp_path, label, n):
+    """reports/layout.py ``page_plot``: every figure is 12.4 in wide (1240 px, shown at its own
+    size in the page's 1300 px column, so its 9-10 pt text stays 12-14 px), two panels side by
+    side; the legend sits below the panels in as many columns as fit and is not cut by the
+    figure's edges, up to 24 entries and labels of 64 characters (longer ones are clipped)."""
+    from gnibench.reports.layout import MAX_LABEL, WIDTH, page_plot
     from gnibench.reports.render import DPI, render
-    from PIL import Image
-
-    t = np.linspace(0.1, 10.0, 50)
-    panel = Panel(xscale="log", yscale="log", xlabel="t", ylabel="err", title="a panel", grid=True,
-                  legend={"fontsize": 7, "loc": "upper left", "bbox_to_anchor": (1.01, 1.0),
-                          "frameon": False})
-    for k in range(3):
-        panel.series.append(Series(t, (k + 1) * t, {"color": "#1F78B4", "label": f"{label}{k}"}))
-    plot = _grid([panel])
-    render(plot, tmp_path / "f.png")
-    pixels = np.asarray(Image.open(tmp_path / "f.png").convert("L"))
-    inked = np.nonzero((pixels < 250).any(axis=0))[0]
-    assert pixels.shape[1] == int(plot.size[0] * DPI)
-    assert inked[-1] < pixels.shape[1] - 5, (inked[-1], pixels.shape[1])     # legend not cut
-    if len(label) < 40:
-        assert plot.size[0] < 10.5 and pixels.shape[1] - inked[-1] < 1.2 * DPI
-
-
-@pytest.mark.parametrize("label", ["rk4", "heyoka-taylor:precision=long", "m" * 40, "W" * 40])
-def test_a_work_precision_legend_sits_beside_the_panels_uncut(tmp_path, label):
-    """reports/workprecision.py ``_plot``: the families' legend starts just right of the panels
-    (no empty column between them, as the 12.4 in figure left for short labels) and is not cut
-    by the figure's right edge, up to the 40 characters a family label is clipped to."""
-    from gnibench.reports.render import DPI, render
-    from gnibench.reports.workprecision import AXES_RIGHT, _plot
     from PIL import Image
 
     x = np.array([1e2, 2e2, 4e2])
     panels = []
     for _ in range(2):
         panel = Panel(xscale="log", yscale="log", xlabel="nfev", ylabel="error", grid=True)
-        for k in range(2):
-            panel.series.append(Series(x, x ** -(k + 1.0), {"color": "#1F78B4", "marker": "s",
-                                                             "label": f"{label[:39]}{k}"}))
+        for k in range(n):
+            panel.series.append(Series(x, x ** -(k + 1.0), {"color": "#332288", "marker": "s",
+                                                             "label": f"{label}{k}"}))
         panels.append(panel)
-    plot = _plot(panels, 1, "p: work-precision")
-    render(plot, tmp_path / "wp.png")
-    pixels = np.asarray(Image.open(tmp_path / "wp.png").convert("L"))
-    inked = np.nonzero((pixels[: pixels.shape[0] // 2] < 250).any(axis=0))[0]
-    assert inked[-1] < pixels.shape[1] - 5, (inked[-1], pixels.shape[1])     # legend not cut
-    beyond = inked[inked > AXES_RIGHT * DPI + 2]                              # the legend's ink
-    assert beyond.size and beyond[0] < (AXES_RIGHT + 0.3) * DPI               # right beside
-    assert pixels.shape[1] - inked[-1] < 1.0 * DPI                            # no wide margin
+    plot = page_plot(panels, cols=2, title="p: work-precision")
+    render(plot, tmp_path / "f.png")
+    pixels = np.asarray(Image.open(tmp_path / "f.png").convert("L"))
+    assert pixels.shape[1] == int(WIDTH * DPI) == 1240
+    inked_cols = np.nonzero((pixels < 250).any(axis=0))[0]
+    inked_rows = np.nonzero((pixels < 250).any(axis=1))[0]
+    assert inked_cols[0] > 3 and inked_cols[-1] < pixels.shape[1] - 4      # nothing cut
+    assert inked_rows[-1] < pixels.shape[0] - 3
+    axes_bottom = int((1 - plot.adjust["bottom"]) * pixels.shape[0])
+    assert (pixels[axes_bottom + 60:] < 250).any()                        # the legend below
+    labels = [str(s.style["label"]) for s in plot.panels[0].series]
+    assert max(map(len, labels)) <= MAX_LABEL
+    assert plot.legend["fontsize"] >= 9
 
 
 def test_the_advance_widths_are_the_fonts():
-    """reports/plots.py ``ADVANCE``: DejaVu Sans's advance widths for the characters 32-126."""
-    from gnibench.reports.plots import ADVANCE
+    """reports/layout.py ``ADVANCE``: DejaVu Sans's advance widths for the characters 32-126."""
+    from gnibench.reports.layout import ADVANCE
     from matplotlib import font_manager, ft2font
 
     font = ft2font.FT2Font(font_manager.findfont("DejaVu Sans"))

@@ -46,7 +46,15 @@ def test_site_files_and_images(site):
 
 def test_html_escapes_every_user_string(site):
     html = (site / "hostile.html").read_text()
-    assert "<script" not in html                                  # the pages have no script
+    # the only scripts: plotly.js, the diagrams' JSON (no markup can end it) and the few lines
+    # that hand the JSON to plotly
+    scripts = re.findall(r"<script[^>]*>", html)
+    assert scripts and set(scripts) <= {'<script src="assets/plotly.min.js">', "<script>"} | {
+        s for s in scripts if re.fullmatch(r'<script type="application/json" id="wp-[\w.-]+">', s)}
+    for data in re.findall(r'<script type="application/json"[^>]*>(.*?)</script>', html, re.S):
+        assert "<" not in data and ">" not in data and "&" not in data
+        assert json.loads(data)["data"]
+    assert html.count("<script>") == 1 and "Plotly.newPlot" in html
     assert "<img src=x" not in html and "<b>label</b>" not in html and "<em>markup" not in html
     assert "&lt;script&gt;alert(&#39;t&#39;)&lt;/script&gt;" in html
     assert "&lt;img src=x onerror=alert(1)&gt;" in html           # the failed cell's reason
@@ -110,12 +118,15 @@ def test_cost_to_reach():
 def test_league_ranks_ties_and_failures():
     cells = pd.DataFrame({
         "cell": range(7), "family": ["a", "a", "b", "b", "c", "d", "d"],
+        "setup": [0, 0, 2, 2, 4, 5, 5], "swept": "rtol",
         "status": ["ok", "ok", "ok", "ok", "nonfinite", "ok", "ok"],
         "reason": ["", "", "", "", "overflow", "", ""],
         "nfev": [100.0, 1000, 100, 1000, 50, np.nan, np.nan],
         "max_global_error": [1e-2, 1e-6, 1e-2, 1e-6, np.inf, 1e-3, 1e-9]})
     wall = {0: 1e-3, 1: 1e-2, 2: 2e-3, 3: 2e-2, 4: 1e-4, 5: 1e-4, 6: 2e-4}
     rows = {r.family: r for r in league(cells, wall, 1e-5)}
+    assert {r.family for r in league(cells, wall, 1e-5, names={0: "a (T = 1)"})} == \
+        {"a (T = 1)", "b", "c", "d"}
     assert rows["a"].rank_nfev == rows["b"].rank_nfev == 1          # a tie shares the rank
     assert rows["a"].rank_wall == 2 and rows["b"].rank_wall == 3
     assert rows["d"].rank_nfev is None and rows["d"].rank_wall == 1  # no nfev: wall time only
@@ -253,24 +264,6 @@ def test_index_card_names_problems_briefly():
     assert brief(label, None) == label[:BRIEF - 1] + "…"
 
 
-def test_legend_names_a_curve_by_its_method_else_by_its_own_group_label():
-    """[B] Fig 10's observer and penalty cells: method specs equal in their first 48 characters,
-    told apart by their groups' labels; cells of one group (quick: Euler and Störmer-Verlet in
-    the group "explicit Euler and Störmer-Verlet") keep their short specs."""
-    import pandas as pd
-    from gnibench.reports.plots import curve_labels
-
-    spec = "dopri5:adaptive=true,rtol=1e-06,atol=1e-06,hmax=1,max_steps=100000000"
-    cells = pd.DataFrame({"cell": [0, 1, 2, 3, 4],
-                          "label": ["(1) observer", "(2) penalty", "both", "both", None],
-                          "method": [spec + "+observer", spec + "+penalty", "euler:h=0.1",
-                                     "stormer-verlet:h=0.1", spec]})
-    got = curve_labels(cells, [0, 1, 2, 3, 4])
-    assert got == {0: "(1) observer", 1: "(2) penalty", 2: "euler:h=0.1",
-                   3: "stormer-verlet:h=0.1", 4: spec[:47] + "…"}
-    assert curve_labels(cells.assign(label="same"), [0, 1])[0] == spec[:47] + "…"
-
-
 def test_every_registered_method_has_its_own_colour():
     """The methods of one work-precision diagram (all the registered ones) get distinct colours:
     the palette names each of them, none twice (a hashed colour can repeat)."""
@@ -310,11 +303,12 @@ def test_the_chart_colour_bar_shows_the_problems_charts_only():
     from gnibench.reports.render import _panel
 
     cells = pd.DataFrame({"cell": [0], "problem": ["euler-so4"], "method": ["rk4:h=0.01"],
-                          "label": ["rk4"], "family": ["rk4"], "problem_id": ["euler-so4"]})
+                          "label": ["rk4"], "family": ["rk4"], "problem_id": ["euler-so4"],
+                          "setup": [0], "swept_text": ["h=0.01"]})
     charts = np.array([1, 2, 2, 6], dtype=float)
     points = pd.DataFrame({"cell": 0, "x5": [0.1, 0.2, 0.3, 0.4], "x6": [0.0, 0.1, 0.2, 0.3],
                            "chart": charts})
-    panel = section_plot("euler-so4", cells, points, {"rk4": {"color": "k"}}).panels[0]
+    panel = section_plot("euler-so4", cells, points, {0: {"color": "k"}}, {0: "rk4"}).panels[0]
     fig, ax = plt.subplots()
     _panel(fig, ax, panel)
     bar = fig.axes[-1]
@@ -328,3 +322,35 @@ def test_the_chart_colour_bar_shows_the_problems_charts_only():
     points_rgb = points.to_rgba(points.get_array())[:, :3]
     assert np.allclose(points_rgb, [tab10[int(k) - 1] for k in charts])
     plt.close(fig)
+
+
+def test_the_index_badge_tells_complete_failures_and_incomplete(tmp_path):
+    """The index card's badge: ``complete`` (every cell ok), ``complete, with failures`` (a cell
+    ended otherwise), ``incomplete`` (the tables of an interrupted run: metadata complete false)."""
+    import shutil
+
+    import pyarrow.parquet as pq
+
+    path = tmp_path / "t.toml"
+    path.write_text('name = "t"\ntitle = "T"\nreference = "r"\nt_end = 10.0\n'
+                    '[[cells]]\nproblems = ["pendulum"]\n'
+                    'methods = ["dopri5:max_steps=3", "rk4:h=0.1"]\n')
+    assert main(["run", str(path), "-o", str(tmp_path / "a"), "-j", "1", "--no-report"]) == 0
+    build_site([tmp_path / "a"], tmp_path / "s1")
+    index = (tmp_path / "s1" / "index.html").read_text()
+    assert '<span class="badge partial">complete, with failures: 1 max_steps, 1 ok</span>' in index
+    shutil.copytree(tmp_path / "a", tmp_path / "b")
+    table = pq.read_table(tmp_path / "b" / "cells.parquet")
+    meta = json.loads(table.schema.metadata[b"gnibench"])
+    meta.update(complete=False, cells_done=1, cells_total=2)
+    pq.write_table(table.replace_schema_metadata(
+        {**table.schema.metadata, b"gnibench": json.dumps(meta).encode()}),
+        tmp_path / "b" / "cells.parquet")
+    build_site([tmp_path / "b"], tmp_path / "s2")
+    index = (tmp_path / "s2" / "index.html").read_text()
+    assert '<span class="badge warn">incomplete: 1 of 2 cells done</span>' in index
+    assert "badge ok" not in index and "badge partial" not in index
+    path.write_text(path.read_text().replace('"dopri5:max_steps=3", ', ""))
+    assert main(["run", str(path), "-o", str(tmp_path / "c"), "-j", "1", "--no-report"]) == 0
+    build_site([tmp_path / "c"], tmp_path / "s3")
+    assert '<span class="badge ok">complete</span>' in (tmp_path / "s3" / "index.html").read_text()

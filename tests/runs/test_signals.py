@@ -128,7 +128,7 @@ def _children(pid: int) -> list[int]:
 def _gone(pid: int) -> bool:
     try:
         status = Path(f"/proc/{pid}/status").read_text()
-    except FileNotFoundError:
+    except (FileNotFoundError, ProcessLookupError):     # gone while it was read (ESRCH)
         return True
     return "\nState:\tZ" in status                 # a zombie has ended
 

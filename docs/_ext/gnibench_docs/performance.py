@@ -112,7 +112,7 @@ def mutation_section(repo: Path) -> str:
     ``gnibench verify --mutants``): its score, date, scale, and what killed each mutant."""
     import json
 
-    files = sorted((repo / "benchmarks").glob("mutants-*.json"))
+    files = sorted((repo / "benchmarks").glob("mutants-20*.json"))   # the catalog, not held-out sets
     docs = []
     for f in files:
         try:
@@ -134,7 +134,7 @@ def mutation_section(repo: Path) -> str:
             f"{code(path.relative_to(repo))}: **{doc.get('killed')} of {doc.get('total')} mutants "
             f"killed** (campaign {'complete' if doc.get('complete') else 'incomplete'}; the "
             f"unmutated baseline: {_verdicts(base.get('verdicts') or {})}, "
-            f"{len(base.get('unexpected') or [])} unexpected). {{doc}}`/explanation/mutation` "
+            f"{len(base.get('unexpected') or [])} unexpected). {{doc}}`/explanation/mutation-testing` "
             "says what this measures.\n\n"
             + table(["mutant", "outcome", "killed by", "the bug"], rows))
 
