@@ -30,7 +30,7 @@ from pathlib import Path
 from typing import Self
 
 from gnibench.suite.foundation.cache import discard, warn
-from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.errors import UserError, named
 from gnibench.suite.foundation.provenance import versions
 
 #: what the numbers of a cell depend on (folders and files of the package, relative to its root)
@@ -120,7 +120,7 @@ class Store:
             discard(self.parts)
             self.parts.mkdir()
         except OSError as e:
-            raise UserError(f"bad -o {self.out}: cannot create {self.parts} ({e.strerror})") \
+            raise UserError(f"bad {named('-o', str(self.out))}: cannot create {self.parts} ({e.strerror})") \
                 from None
         lock = DirectoryLock(self.out)
         lock.acquire()
