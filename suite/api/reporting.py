@@ -6,7 +6,7 @@ import math
 from pathlib import Path
 
 from gnibench.suite.api.arguments import api_function
-from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.errors import UserError, named
 
 
 def default_site(dirs: list[Path]) -> Path:
@@ -44,7 +44,7 @@ def build_report(dirs: list[Path], output: Path | None = None, *, accuracy=None,
     if benchmarks is None and Path(".benchmarks").is_dir():
         benchmarks = Path(".benchmarks")
     if benchmarks is not None and not Path(benchmarks).is_dir():
-        raise UserError(f"bad --benchmarks {benchmarks}: not a directory")
+        raise UserError(f"bad {named('--benchmarks', str(benchmarks))}: not a directory")
     return Path(build_site([Path(d) for d in dirs], site, thresholds,
                            None if benchmarks is None else Path(benchmarks), log=log,
                            plots=plots))

@@ -13,7 +13,7 @@ import sys
 from pathlib import Path
 
 from gnibench.suite.api.arguments import api_function
-from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.errors import UserError, spelled
 
 #: what drawing a figure imports (the drawing process imports them once, before its forks)
 FIGURE_MODULES = ("pandas", "pyarrow.parquet", "matplotlib.pyplot", "gnibench.reports.figures",
@@ -63,13 +63,15 @@ def reproduce_figures(ids: list[str], *, scale: str = "paper", output: Path | No
 def _check_redraw(out: Path, ids: list[str], jobs, scheduler, fresh: bool) -> None:
     for option, value in (("jobs", jobs), ("scheduler", scheduler)):
         if value is not None:
-            raise UserError(f"--{option} does not apply with --redraw (nothing is run)")
+            raise UserError(f"{spelled('--' + option)} does not apply with {spelled('--redraw')} "
+                            f"(nothing is run)")
     if fresh:
-        raise UserError("--fresh does not apply with --redraw (nothing is run)")
+        raise UserError(f"{spelled('--fresh')} does not apply with {spelled('--redraw')} (nothing "
+                        f"is run)")
     missing = [fid for fid in ids if not (out / fid / "cells.parquet").is_file()]
     if missing:
-        raise UserError(f"no results for {', '.join(missing)} in {out}; run gnibench "
-                        f"reproduce {' '.join(missing)} first (without --redraw)")
+        raise UserError(f"no results for {', '.join(missing)} in {out}; reproduce "
+                        f"{' '.join(missing)} first (without {spelled('--redraw')})")
 
 
 def _draw(d: Path, figure: dict | None):

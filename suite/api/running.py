@@ -6,12 +6,12 @@ import contextlib
 import json
 import math
 import re
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from gnibench.suite.api.arguments import api_function
 from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.scratch import scratch_dir
 
 
 @dataclass
@@ -138,8 +138,10 @@ def run(experiment: str | Path | dict, *, output: Path | None = None, jobs: int 
         to the working directory).
     output : path, optional
         The results directory (``samples.parquet``, ``cells.parquet``, ``timings.parquet``,
-        ``summary.md``; no report site, see :func:`gnibench.report`). None runs in a temporary
-        directory and keeps the tables in memory only.
+        ``summary.md``; no report site, see :func:`gnibench.report`). None runs in a scratch
+        directory of the kernel cache, removed on return (one left by a killed process is
+        removed by the next call, :mod:`gnibench.suite.foundation.scratch`), and keeps the
+        tables in memory only.
     jobs : int, optional
         Worker processes (default: the number of cores; 1: serial, in this process).
     executor : {"local", "dask"}, default "local"
@@ -197,7 +199,7 @@ def run(experiment: str | Path | dict, *, output: Path | None = None, jobs: int 
     executors.check(executor, jobs, scheduler)
     with contextlib.ExitStack() as stack:
         if output is None:
-            out = Path(stack.enter_context(tempfile.TemporaryDirectory(prefix="gnibench-run-")))
+            out = stack.enter_context(scratch_dir("run"))
         else:
             out = output
         run_experiments([exp], [out], out, jobs=jobs, executor=executor, scheduler=scheduler,

@@ -8,12 +8,12 @@ resumable, shared with :func:`gnibench.reproduce`); the verdicts are judged from
 from __future__ import annotations
 
 import contextlib
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
 from gnibench.suite.api.arguments import api_function, id_list
-from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.errors import UserError, named
+from gnibench.suite.foundation.scratch import scratch_dir
 
 SCALES = ("quick", "paper")
 
@@ -37,7 +37,7 @@ class Ledger:
 
 def check_scale(scale: str) -> str:
     if scale not in SCALES:
-        raise UserError(f"bad --scale {scale!r}; allowed: {', '.join(SCALES)}")
+        raise UserError(f"bad {named('--scale', repr(scale))}; allowed: {', '.join(SCALES)}")
     return scale
 
 
@@ -104,8 +104,9 @@ def verify(ids: str | list[str] = "all", *, scale: str = "quick", output: Path |
         ``quick``: the shortened horizons of the experiments' quick scale; ``paper``: the seeds'
         own (claims stated at the paper scale only are then judged too).
     output : path, optional
-        The results directory (the runs' tables, the ledger); None works in a temporary
-        directory, removed on return.
+        The results directory (the runs' tables, the ledger); None works in a scratch
+        directory of the kernel cache, removed on return (one left by a killed process is
+        removed by the next call, :mod:`gnibench.suite.foundation.scratch`).
     jobs : int, optional
         Worker processes (default: the number of cores; 1: in this process).
     executor : {"local", "dask"}, default "local"
@@ -138,8 +139,7 @@ def verify(ids: str | list[str] = "all", *, scale: str = "quick", output: Path |
     import pandas as pd
 
     with contextlib.ExitStack() as stack:
-        out = output if output is not None else Path(
-            stack.enter_context(tempfile.TemporaryDirectory(prefix="gnibench-verify-")))
+        out = output if output is not None else stack.enter_context(scratch_dir("verify"))
         check_claims(id_list(ids), scale=scale, output=out, jobs=jobs, executor=executor,
                      scheduler=scheduler)
         return pd.read_parquet(out / "ledger.parquet")

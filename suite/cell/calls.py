@@ -15,6 +15,7 @@ import time
 from collections.abc import Callable
 
 import numpy as np
+from gnibench.suite.foundation.errors import spelled
 from gnibench.suite.foundation.status import Status
 
 CALL_SECONDS = 0.1          # target duration of one call of a compiled driver
@@ -46,7 +47,7 @@ def budget_reason(status: Status, buffers: Buffers, t: float) -> str:
     return (f"the output budget is full at t = {t:.17g} after {rows} rows (at most {buffers.cap} "
             f"rows of {buffers.dim} states: GNIBENCH_MAX_ROWS={limit('GNIBENCH_MAX_ROWS')}, "
             f"GNIBENCH_MAX_OUTPUT_MB={limit('GNIBENCH_MAX_OUTPUT_MB')}); sample less often "
-            f"(--every, --dt-out) or raise the limits")
+            f"({spelled('--every')}, {spelled('--dt-out')}) or raise the limits")
 
 
 class Buffers:

@@ -23,7 +23,7 @@ from gnibench.suite.cell.grid import grid, grid_step, sample_rows
 from gnibench.suite.cell.reference import ReferenceSpec, default_reference, parse_reference
 from gnibench.suite.cell.spec import MethodConfig, prepare
 from gnibench.suite.foundation.budgets import check_count, check_integer, check_output
-from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.errors import UserError, named, spelled
 from gnibench.suite.foundation.params import Bound
 
 LOCATORS = ("dense", "henon")
@@ -206,7 +206,7 @@ def build(problem, method, *, steps: int | None = None, t_end: float | None = No
     check_integer(every, "--every")
     dt_out = check_dt_out(dt_out)
     if steps is not None and t_end is not None or steps is None and t_end is None:
-        raise UserError("give exactly one of --steps N or --t-end T")
+        raise UserError(f"give exactly one of {named('--steps', 'N')} or {named('--t-end', 'T')}")
     t_end = None if t_end is None else float(t_end)
     if dt_out is not None and method.kind != "compiled":   # an engine's dt_out: its own grid
         method = engine_method(method, dt_out, problem)
@@ -237,23 +237,25 @@ def _check_kind(cell: CellSpec) -> None:
         check_integer(cell.section, "--section")
         section_of(problem.record)                          # a UserError without a section
         if grid_spacing is not None or cell.dt_out is not None:
-            raise UserError("--dt-out (or the method option dt_out) does not apply with "
-                            "--section (the section points are written)")
+            raise UserError(f"{spelled('--dt-out')} (or the method option dt_out) does not apply "
+                            f"with {spelled('--section')} (the section points are written)")
         _check_locator(cell)
     elif cell.locator is not None:
         raise UserError(f"locator={cell.locator!r} applies to section crossings only; allowed: "
-                        f"a section (--section K), or no locator")
+                        f"a section ({named('--section', 'K')}), or no locator")
     if not compiled and cell.transformed is not None:
         raise UserError(f"{method.base.id} is an external engine; it cannot integrate the "
                         f"transformed system of {problem.id} (drop the transform option)")
     if compiled and cell.adaptive and cell.t_end is None:
-        raise UserError(f"{method.base.id} with adaptive=true needs --t-end T (not --steps); "
+        raise UserError(f"{method.base.id} with adaptive=true needs {named('--t-end', 'T')} (not "
+                        f"{spelled('--steps')}); "
                         f"for fixed steps use {method.base.id}:adaptive=false,h=...")
     if compiled and cell.transformed is not None and grid_spacing is not None:
         tr = problem.record.transform
         if tr.time is None:
-            raise UserError(f"bad --dt-out for {problem.id} with {tr.option}=true: the "
-                            f"transformed system has no time component; allowed: --every K")
+            raise UserError(f"bad {spelled('--dt-out')} for {problem.id} with {tr.option}=true: "
+                            f"the transformed system has no time component; allowed: "
+                            f"{named('--every', 'K')}")
     if compiled and cell.section is None:
         cell.grid_plan                                      # noqa: B018 (planned now, once)
     if cell.reverse:
@@ -261,7 +263,8 @@ def _check_kind(cell: CellSpec) -> None:
             raise UserError(f"reverse=True applies to fixed-step compiled methods; "
                             f"{method.text()} on {problem.text()} is not one")
         if cell.dt_out is not None or cell.section is not None:
-            raise UserError("reverse=True samples every K steps; drop --dt-out and --section")
+            raise UserError(f"reverse=True samples every K steps; drop {spelled('--dt-out')} and "
+                            f"{spelled('--section')}")
 
 
 def _check_locator(cell: CellSpec) -> None:

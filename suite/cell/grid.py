@@ -6,22 +6,22 @@ from dataclasses import dataclass
 
 import numpy as np
 from gnibench.suite.foundation.budgets import INT_LIMIT, check_integer
-from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.errors import UserError, named
 
 
 def grid(h: float, steps: int | None, t_end: float | None) -> tuple[int, float]:
     """Number of steps and the last step: n steps of h, or reach t_end exactly (last step shorter)."""
     if (steps is None) == (t_end is None):
-        raise UserError("give exactly one of --steps N or --t-end T")
+        raise UserError(f"give exactly one of {named('--steps', 'N')} or {named('--t-end', 'T')}")
     if steps is not None:
         check_integer(steps, "--steps")
         return int(steps), h
     if not (t_end > 0 and math.isfinite(t_end)):
-        raise UserError(f"bad --t-end {t_end}; allowed: a finite number > 0")
+        raise UserError(f"bad {named('--t-end', str(t_end))}; allowed: a finite number > 0")
     ratio = t_end / h
     if not ratio < INT_LIMIT:
-        raise UserError(f"--t-end {t_end:g} with a step (or output interval) of {h:g} needs more than "
-                        f"2^62 steps; "
+        raise UserError(f"{named('--t-end', format(t_end, 'g'))} with a step (or output interval) "
+                        f"of {h:g} needs more than 2^62 steps; "
                         f"allowed: a larger step or a shorter horizon")
     n = round(ratio)
     if n >= 1 and abs(ratio - n) <= 1e-9 * max(1.0, ratio):

@@ -44,7 +44,7 @@ import numpy as np
 from gnibench.methods.engines.heyoka import epsilon, precision_name
 from gnibench.suite.cell.spec import parse_item
 from gnibench.suite.foundation.cache import cache_dir, discard, read_checked, warn, write_checked
-from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.errors import UserError, named
 from gnibench.suite.foundation.params import Param, bind
 
 BACKENDS = ("exact", "heyoka", "rebound")
@@ -107,7 +107,7 @@ def resolve(backend: str, precision: str = "double", tol: float | None = None,
     if problem is not None:
         if backend == "exact" and problem.exact is None:
             raise UserError(f"problem {problem.id} has no exact solution; use a heyoka reference "
-                            f"(--reference heyoka)")
+                            f"({named('--reference', 'heyoka')})")
         if backend == "rebound":
             from gnibench.methods.engines.rebound import adapter
 

@@ -68,7 +68,7 @@ from gnibench.suite.cell.calls import Buffers
 from gnibench.suite.cell.compiled import dense_output_refusal, problem_kernel
 from gnibench.suite.cell.drivers import AdaptiveDriver, FixedStepDriver, build_trajectory, kind_of
 from gnibench.suite.cell.trajectory import Trajectory
-from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.errors import UserError, spelled
 from gnibench.suite.foundation.provenance import versions
 from gnibench.suite.foundation.status import Status
 
@@ -78,7 +78,8 @@ CHUNK = 4096                  # rows (crossings) of one output buffer
 def section_of(rec, index: int = 0):
     """The problem's section record (a UserError for a problem without one)."""
     if not rec.sections:
-        raise UserError(f"{rec.id} has no Poincaré section; --section applies to problems with one "
+        raise UserError(f"{rec.id} has no Poincaré section; {spelled('--section')} applies to "
+                        f"problems with one "
                         f"(see `gnibench list problems`)")
     return rec.sections[index]
 
@@ -197,7 +198,7 @@ def _trajectory(problem, method, sec, crossings, t, y, c, status, meta) -> Traje
         reason = f"the integration stopped ({status}) at t = {meta['t_last_sample']:.17g}"
     elif rows < crossings:
         reason = (f"only {rows} of {crossings} crossings of {sec.name} before "
-                  f"t = {meta['t_last_sample']:.17g}; raise --t-end / --steps")
+                  f"t = {meta['t_last_sample']:.17g}; raise {spelled('--t-end')} / {spelled('--steps')}")
     y = np.asarray(y, dtype=float).reshape(rows, rec.dim)
     chart = None
     if sec.chart is not None:

@@ -17,7 +17,7 @@ import warnings
 from dataclasses import dataclass
 
 import numpy as np
-from gnibench.suite.foundation.errors import UserError, unknown
+from gnibench.suite.foundation.errors import UserError, named, unknown
 from gnibench.suite.foundation.params import Bound, bind
 
 _MODIFIER_SPLIT = re.compile(r"\+(?=[A-Za-z])")
@@ -56,7 +56,7 @@ def split_list(text: str, name: str = "--metrics") -> list[str]:
     parts: list[str] = []
     for piece in text.split(","):
         if not piece.strip():
-            raise UserError(f"bad {name} {text!r}: an empty spec between commas; allowed: specs "
+            raise UserError(f"bad {named(name, repr(text))}: an empty spec between commas; allowed: specs "
                             f"separated by commas, e.g. eta,growth:of=H")
         if parts and "=" in piece.partition(":")[0]:
             parts[-1] += "," + piece          # an option of the previous spec

@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 from gnibench.suite.cell.compiled import dense_output_refusal
 from gnibench.suite.cell.grid import grid
-from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.errors import UserError, named, spelled
 from gnibench.suite.foundation.params import Bound
 
 NO_LIMIT = 1 << 62            # grid indices of a grid in a state component (its end is not known)
@@ -65,7 +65,7 @@ def check_dt_out(dt_out, name: str = "--dt-out") -> float | None:
         return None
     if isinstance(dt_out, bool) or not isinstance(dt_out, (int, float)) or not (
             math.isfinite(dt_out) and dt_out > 0):
-        raise UserError(f"bad {name} {dt_out!r}; allowed: a finite number > 0")
+        raise UserError(f"bad {named(name, repr(dt_out))}; allowed: a finite number > 0")
     return float(dt_out)
 
 
@@ -75,7 +75,7 @@ def effective_dt_out(method, dt_out: float | None) -> float | None:
     option = method.base.values.get("dt_out") if method.base.values.get("adaptive") else None
     option = option if option else None
     if dt_out is not None and option is not None and dt_out != option:
-        raise UserError(f"conflicting dt_out: --dt-out {dt_out!r} but the method spec has "
+        raise UserError(f"conflicting dt_out: {named('--dt-out', repr(dt_out))} but the method spec has "
                         f"dt_out={option!r}; allowed: one of them, or the same value")
     return dt_out if dt_out is not None else option
 
@@ -104,14 +104,14 @@ def engine_method(method, dt_out: float, problem=None):
 
     rec = method.base.record
     if getattr(rec, "grid_param", "h") != "dt_out":
-        raise UserError(f"bad --dt-out for {rec.id}: it is fixed-step and samples every K steps of "
-                        f"h; allowed: --every K")
+        raise UserError(f"bad {spelled('--dt-out')} for {rec.id}: it is fixed-step and samples "
+                        f"every K steps of h; allowed: {named('--every', 'K')}")
     default = next(p.default for p in rec.params if p.name == "dt_out")
     if problem is not None:
         default *= problem.record.time_scale_of(problem.values)
     given = method.base.values["dt_out"]
     if given not in (default, dt_out):
-        raise UserError(f"conflicting dt_out: --dt-out {dt_out!r} but the method spec has "
+        raise UserError(f"conflicting dt_out: {named('--dt-out', repr(dt_out))} but the method spec has "
                         f"dt_out={given!r}; allowed: one of them, or the same value")
     base = Bound(rec, {**method.base.values, "dt_out": dt_out})
     return replace(method, base=base)

@@ -306,7 +306,9 @@ def main(argv=None) -> int:
     """The command line; returns the exit code: 0, 1 (a verdict or comparison that failed, or a
     fault during work such as a full disk), 2 (bad input), 130/143 (SIGINT/SIGTERM)."""
     from gnibench.suite.cli import signals, streams
+    from gnibench.suite.foundation.errors import EDGE
 
+    edge = EDGE.set("cli")          # errors name options as flags (--steps 0), not keywords
     try:
         with signals.handling(), streams.tolerant():
             return _main(argv)
@@ -314,6 +316,8 @@ def main(argv=None) -> int:
         signals.quiet()
         print(f"gnibench: {signals.message()}", file=sys.stderr)
         return signals.exit_code()
+    finally:
+        EDGE.reset(edge)
 
 
 def _main(argv) -> int:

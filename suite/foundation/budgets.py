@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 import os
 
-from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.errors import UserError, named
 from gnibench.suite.foundation.numba_settings import check_numba_settings
 from gnibench.suite.foundation.numbers import INT_LIMIT, parse_int
 
@@ -70,5 +70,5 @@ def check_output(rows: float, columns: int, what: str) -> None:
 def check_integer(value, name: str, low: int = 1) -> int:
     """An integer option within [low, INT_LIMIT]."""
     if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= INT_LIMIT:
-        raise UserError(f"bad {name} {value!r}; allowed: an integer from {low} to 2^62")
+        raise UserError(f"bad {named(name, repr(value))}; allowed: an integer from {low} to 2^62")
     return value

@@ -1,6 +1,7 @@
 """User-facing errors: one line, exit code 2, no traceback."""
 from __future__ import annotations
 
+import contextvars
 import difflib
 
 
@@ -60,3 +61,39 @@ def unknown(kind: str, name: str, known) -> UserError:
     near = nearest(name, known)
     hint = f"; did you mean {near!r}?" if near else ""
     return UserError(f"unknown {kind} {name!r}{hint} (known: {', '.join(known)})")
+
+
+#: where the process was called from: ``"api"`` (Python, the default) or ``"cli"`` (set by the
+#: command line, :func:`gnibench.suite.cli.main.main`); an error names an option as it was given
+EDGE = contextvars.ContextVar("gnibench_edge", default="api")
+_KEYWORDS = {"-j": "jobs", "-o": "output"}
+
+
+def named(flag: str, shown: str) -> str:
+    """An option and its bad value as the user gave them: ``--steps 0`` on the command line,
+    ``steps=0`` from Python (the keyword of the API function; a flag ``--dt-out`` is the keyword
+    ``dt_out``, ``-j`` is ``jobs``). A name that is not a flag (``steps =`` of an experiment
+    file, ``GNIBENCH_MAX_STEPS=``) is kept.
+
+    Examples
+    --------
+    >>> named("--dt-out", "0")
+    'dt_out=0'
+    >>> token = EDGE.set("cli")
+    >>> named("--dt-out", "0")
+    '--dt-out 0'
+    >>> EDGE.reset(token)
+    """
+    if not flag.startswith("-"):            # GNIBENCH_MAX_STEPS=inf, steps = 0
+        return f"{flag}{'' if flag.endswith('=') and not flag.endswith(' =') else ' '}{shown}"
+    if EDGE.get() == "cli":
+        return f"{flag} {shown}"
+    return f"{spelled(flag)}={shown}"
+
+
+def spelled(flag: str) -> str:
+    """An option's name as the user gave it: the flag on the command line (``--dt-out``), the
+    keyword from Python (``dt_out``); see :func:`named`."""
+    if not flag.startswith("-") or EDGE.get() == "cli":
+        return flag
+    return _KEYWORDS.get(flag, flag.lstrip("-").replace("-", "_"))

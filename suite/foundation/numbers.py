@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 import re
 
-from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.errors import UserError, named
 
 FLOAT = re.compile(r"^[+-]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][+-]?[0-9]+)?$", re.ASCII)
 INT = re.compile(r"^[+-]?[0-9]+$", re.ASCII)
@@ -28,8 +28,8 @@ def ascii_note(text: str) -> str:
 def _bad(name: str, text: str, allowed: str) -> UserError:
     plain = text and text.isascii() and text.isprintable() and " " not in text
     shown = text if plain else repr(text)               # bad -j 0, bad --steps '١٠'
-    sep = "" if name.endswith("=") else " "             # bad GNIBENCH_MAX_STEPS=inf
-    return UserError(f"bad {name}{sep}{shown}; allowed: {allowed}{ascii_note(text)}")
+    # bad --steps 0 (command line), bad steps=0 (Python), bad GNIBENCH_MAX_STEPS=inf
+    return UserError(f"bad {named(name, shown)}; allowed: {allowed}{ascii_note(text)}")
 
 
 def parse_float(text: str, name: str, *, low: float | None = None, high: float | None = None,

@@ -19,7 +19,7 @@ import os
 import stat
 from pathlib import Path
 
-from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.errors import UserError, named
 
 
 class Fault(Exception):
@@ -54,7 +54,7 @@ def check_output_file(path: Path, option: str = "-o") -> None:
     try:
         _check_file(path, f"{option} {path}")
     except OSError as e:                 # a name too long, a loop of symlinks, ...
-        raise UserError(f"bad {option} {path}: {e.strerror or e}") from None
+        raise UserError(f"bad {named(option, str(path))}: {e.strerror or e}") from None
 
 
 def _check_file(path: Path, what: str) -> None:
@@ -90,7 +90,7 @@ def check_output_dir(path: Path, option: str = "-o") -> None:
     try:
         _check_dir(path, f"{option} {path}")
     except OSError as e:
-        raise UserError(f"bad {option} {path}: {e.strerror or e}") from None
+        raise UserError(f"bad {named(option, str(path))}: {e.strerror or e}") from None
 
 
 def _check_dir(path: Path, what: str) -> None:

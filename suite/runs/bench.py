@@ -114,9 +114,9 @@ def bench(steps: int = 2_000_000, with_c: bool = True, adaptive: bool = True,
     """Print the tables (and return their rows): fixed step numba vs C ns/step, ratio, agreement;
     adaptive dopri5/dop853 vs C and solve_ivp (``bench_adaptive``); startup."""
     if steps < 1:
-        from gnibench.suite.foundation.errors import UserError
+        from gnibench.suite.foundation.errors import UserError, named
 
-        raise UserError(f"bad --steps {steps}; allowed: an integer >= 1")
+        raise UserError(f"bad {named('--steps', str(steps))}; allowed: an integer >= 1")
     print(f"{PROBLEM} e=0.6, h = 2pi/1000, {steps} steps, min/median of {REPEATS} repeats "
           "(compile excluded)")
     rows = []

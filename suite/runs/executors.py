@@ -24,7 +24,7 @@ import os
 import signal
 from collections.abc import Callable, Iterator
 
-from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.errors import UserError, named, spelled
 from gnibench.suite.foundation.outputs import Fault
 from gnibench.suite.runs.cellwork import CellOutcome, run_cell
 from gnibench.suite.runs.pool import default_jobs, workers  # noqa: F401 - part of this interface
@@ -37,20 +37,20 @@ Progress = Callable[[int, float], None]
 def check(executor: str, jobs: int | None, scheduler: str | None) -> None:
     """Refuse bad executor options before anything runs or is written."""
     if executor not in EXECUTORS:
-        raise UserError(f"bad --executor {executor!r}; allowed: {', '.join(EXECUTORS)}")
+        raise UserError(f"bad {named('--executor', repr(executor))}; allowed: {', '.join(EXECUTORS)}")
     if jobs is not None and not 1 <= jobs <= 1024:
-        raise UserError(f"bad -j {jobs}; allowed: an integer from 1 to 1024")
+        raise UserError(f"bad {named('-j', str(jobs))}; allowed: an integer from 1 to 1024")
     if scheduler is not None:
         if executor != "dask":
-            raise UserError("--scheduler needs --executor dask")
+            raise UserError(f"{spelled('--scheduler')} needs {named('--executor', 'dask')}")
         if not scheduler.strip() or any(c.isspace() for c in scheduler):
-            raise UserError(f"bad --scheduler {scheduler!r}; allowed: an address such as "
+            raise UserError(f"bad {named('--scheduler', repr(scheduler))}; allowed: an address such as "
                             f"tcp://127.0.0.1:8786")
     if executor == "dask":
         try:
             import distributed  # noqa: F401
         except ImportError:
-            raise UserError("--executor dask needs dask[distributed]: pip install "
+            raise UserError(f"{named('--executor', 'dask')} needs dask[distributed]: pip install "
                             "'gnibench[dask]'") from None
     if scheduler is not None:      # before the output directory exists: is a scheduler there?
         from gnibench.suite.runs.scheduler import probe
@@ -156,7 +156,7 @@ def _dask(groups, jobs, scheduler) -> Iterator[CellOutcome]:
                 except Exception as e:  # noqa: BLE001 - its workers died as it started, say
                     cause = " ".join(str(e).split())[:160] or type(e).__name__
                     raise Fault(f"the local Dask cluster could not start ({cause}); nothing was "
-                                f"lost: run the command again (or use --executor local)") from None
+                                f"lost: run the command again (or use {named('--executor', 'local')})") from None
             client = Client(cluster)
         finally:
             signal.pthread_sigmask(signal.SIG_UNBLOCK, blocked)
@@ -164,7 +164,7 @@ def _dask(groups, jobs, scheduler) -> Iterator[CellOutcome]:
         try:
             client = Client(scheduler, timeout="10s")
         except Exception as e:  # noqa: BLE001 - it answered the probe, then went away
-            raise UserError(f"bad --scheduler {scheduler!r}: cannot connect "
+            raise UserError(f"bad {named('--scheduler', repr(scheduler))}: cannot connect "
                             f"({type(e).__name__}: {e})") from None
     try:
         waiting, cells = {}, {}        # pure=False: fresh keys, never a result of another run

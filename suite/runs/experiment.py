@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING
 
 from gnibench.suite.cell.spec import structure, with_options
 from gnibench.suite.foundation.budgets import check_count
-from gnibench.suite.foundation.errors import UserError, unknown
+from gnibench.suite.foundation.errors import UserError, named, unknown
 from gnibench.suite.foundation.tomlfile import load_toml, read_text_file
 from gnibench.suite.runs.cell import Cell
 
@@ -130,7 +130,7 @@ def check_repeat(value, name: str = "repeat") -> int:
     from gnibench.suite.runs.report_schema import MAX_REPEAT
 
     if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= MAX_REPEAT:
-        raise UserError(f"bad {name} {value!r}; allowed: an integer from 1 to {MAX_REPEAT}")
+        raise UserError(f"bad {named(name, repr(value))}; allowed: an integer from 1 to {MAX_REPEAT}")
     return value
 
 

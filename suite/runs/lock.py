@@ -26,7 +26,7 @@ import stat
 from pathlib import Path
 
 from gnibench.suite.foundation.cache import warn
-from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.errors import UserError, named
 
 _held: set[int] = set()            # descriptors of the locks this process holds
 
@@ -78,11 +78,11 @@ def _open(path: Path) -> int:
             shutil.rmtree(path, ignore_errors=True)
         except OSError as e:
             if not path.is_symlink():
-                raise UserError(f"bad -o {path.parent}: cannot open {path.name} "
+                raise UserError(f"bad {named('-o', str(path.parent))}: cannot open {path.name} "
                                 f"({e.strerror})") from None
             warn(f"{path} is a symlink, not a lock file; removed")
             path.unlink()
-    raise UserError(f"bad -o {path.parent}: {path.name} cannot be made a lock file")
+    raise UserError(f"bad {named('-o', str(path.parent))}: {path.name} cannot be made a lock file")
 
 
 def _pid(text: str) -> int | None:

@@ -13,7 +13,7 @@ import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
-from gnibench.suite.foundation.errors import UserError, unknown
+from gnibench.suite.foundation.errors import UserError, spelled, unknown
 from gnibench.suite.runs.experiment import Experiment, load_experiment, shipped
 from gnibench.suite.runs.scales import SCALES, check_scale
 
@@ -134,5 +134,5 @@ def current_figure(fid: str, results: Path) -> dict:
     experiment = load_experiment(fid, meta.get("scale", "paper"))
     if [c.described() for c in experiment.cells] != meta.get("cells"):
         raise UserError(f"{fid}: the cells of the file changed since the tables in {results} were "
-                        f"computed; run gnibench reproduce {fid} again (without --redraw)")
+                        f"computed; reproduce {fid} again (without {spelled('--redraw')})")
     return experiment.figure

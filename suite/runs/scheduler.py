@@ -32,14 +32,14 @@ import sys
 import threading
 import time
 
-from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.errors import UserError, named
 
 TIMEOUT = 10.0                  # seconds for the whole exchange
 MAX_HANDSHAKE = 64 * 2 ** 20    # a Dask handshake is a few hundred bytes
 
 
 def _bad(address: str, why: str) -> UserError:
-    return UserError(f"bad --scheduler {address!r}: {why}; allowed: the address of a running Dask "
+    return UserError(f"bad {named('--scheduler', repr(address))}: {why}; allowed: the address of a running Dask "
                      f"scheduler, e.g. tcp://127.0.0.1:8786")
 
 

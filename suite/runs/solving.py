@@ -13,7 +13,7 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass
 
-from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.errors import UserError, spelled
 
 
 @dataclass
@@ -45,13 +45,14 @@ def check_options(every: int, section, reference, dt_out) -> None:
     """Options that exclude each other (the command line's flag names in the messages)."""
     if section is not None:
         if every != 1:
-            raise UserError("--every does not apply with --section (the section points are written)")
+            raise UserError(f"{spelled('--every')} does not apply with {spelled('--section')} (the "
+                            f"section points are written)")
         if reference is not None:
-            raise UserError("--reference does not apply with --section (no global error is "
-                            "written)")
+            raise UserError(f"{spelled('--reference')} does not apply with {spelled('--section')} "
+                            f"(no global error is written)")
         if dt_out is not None:
-            raise UserError("--dt-out does not apply with --section (the section points are "
-                            "written)")
+            raise UserError(f"{spelled('--dt-out')} does not apply with {spelled('--section')} (the "
+                            f"section points are written)")
 
 
 def solve_cell_spec(problem, method, *, steps: int | None = None, t_end: float | None = None,

@@ -47,7 +47,7 @@ from pathlib import Path
 from typing import Self
 
 from gnibench.suite.foundation.cache import discard, warn
-from gnibench.suite.foundation.errors import UserError
+from gnibench.suite.foundation.errors import UserError, named
 from gnibench.suite.foundation.files import NotRegularFile, open_regular_file
 from gnibench.suite.foundation.provenance import versions
 from gnibench.suite.runs.partfile import FORMAT as PART_FORMAT
@@ -137,8 +137,8 @@ class Store:
             discard(self.parts)
             self.parts.mkdir()
         except OSError as e:
-            raise UserError(f"bad -o {self.out}: cannot create {self.parts} ({e.strerror})") \
-                from None
+            raise UserError(f"bad {named('-o', str(self.out))}: cannot create {self.parts} "
+                            f"({e.strerror})") from None
         lock = DirectoryLock(self.out)
         lock.acquire()
         self._lock = lock
@@ -155,13 +155,13 @@ class Store:
         out = Path(out)
         try:
             if out.exists() and not out.is_dir():
-                raise UserError(f"bad -o {out}: it exists and is not a directory")
+                raise UserError(f"bad {named('-o', str(out))}: it exists and is not a directory")
             if out.is_symlink() and not out.exists():
-                raise UserError(f"bad -o {out}: it is a broken symlink (to {os.readlink(out)}); "
+                raise UserError(f"bad {named('-o', str(out))}: it is a broken symlink (to {os.readlink(out)}); "
                                 f"allowed: a directory, or a place to make one")
             out.mkdir(parents=True, exist_ok=True)
         except OSError as e:
-            raise UserError(f"bad -o {out}: cannot create the directory ({e.strerror})") from None
+            raise UserError(f"bad {named('-o', str(out))}: cannot create the directory ({e.strerror})") from None
         probe(out, f"-o {out}")
 
     def close(self) -> None:

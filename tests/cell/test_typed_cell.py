@@ -234,7 +234,7 @@ def test_integrate_takes_the_typed_cell_as_it_is(monkeypatch, problem, method, o
 
 
 @pytest.mark.parametrize("problem, method, options, message", [
-    ("kepler-2d", "dopri5", {"steps": 10}, "needs --t-end T"),
+    ("kepler-2d", "dopri5", {"steps": 10}, "needs t_end=T"),
     ("kepler-3d:ks=true", "scipy-rk45", {"t_end": 1.0}, "cannot integrate the transformed"),
     ("kepler-2d", "rk4", {"steps": 10, "locator": "dense"}, "applies to section crossings only"),
     ("henon-heiles", "rk4:h=0.01", {"t_end": 7.0, "section": 1, "locator": "dense"},

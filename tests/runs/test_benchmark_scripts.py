@@ -1,5 +1,7 @@
 """The benchmark scripts of the runner and of ensembles run (at their quick size), so that none
-can rot: each ends with exit code 0 and prints its table; no timing is checked here."""
+can rot: each ends with exit code 0 and prints its table; no timing is checked here. They are
+benchmarks: marked ``slow``, so CI runs them once (``pytest -m slow``) and the test command
+does not."""
 from __future__ import annotations
 
 import json
@@ -8,7 +10,10 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[2]
+pytestmark = pytest.mark.slow
 
 
 def _run(script: str, tmp_path: Path) -> dict | list:
