@@ -63,25 +63,34 @@ def test_solve_is_the_cli(tmp_path, case):
     assert list(pd.read_csv(csv).columns) == list(traj.samples.columns)
 
 
-@pytest.mark.parametrize("argv, call", [
-    (["kepler-2dd", "rk4", "--steps", "3"], lambda: gnibench.solve("kepler-2dd", "rk4", steps=3)),
+@pytest.mark.parametrize("argv, call, words", [
+    (["kepler-2dd", "rk4", "--steps", "3"], lambda: gnibench.solve("kepler-2dd", "rk4", steps=3),
+     None),
     (["kepler-2d", "rk4:h=-1", "--steps", "3"],
-     lambda: gnibench.solve("kepler-2d", "rk4:h=-1", steps=3)),
-    (["kepler-2d", "rk4", "--steps", "0"], lambda: gnibench.solve("kepler-2d", "rk4", steps=0)),
+     lambda: gnibench.solve("kepler-2d", "rk4:h=-1", steps=3), None),
+    (["kepler-2d", "rk4", "--steps", "0"], lambda: gnibench.solve("kepler-2d", "rk4", steps=0),
+     {"--steps 0": "steps=0"}),
     (["kepler-2d", "dopri5", "--steps", "10"],
-     lambda: gnibench.solve("kepler-2d", "dopri5", steps=10)),
+     lambda: gnibench.solve("kepler-2d", "dopri5", steps=10),
+     {"--t-end T": "t_end=T", "--steps)": "steps)"}),
     (["henon-heiles", "dop853", "--t-end", "9", "--section", "2", "--every", "3"],
-     lambda: gnibench.solve("henon-heiles", "dop853", t_end=9.0, section=2, every=3)),
+     lambda: gnibench.solve("henon-heiles", "dop853", t_end=9.0, section=2, every=3),
+     {"--every": "every", "--section": "section"}),
     (["kepler-2d", "scipy-rk45+observer:on=H/L", "--t-end", "1"],
-     lambda: gnibench.solve("kepler-2d", "scipy-rk45+observer:on=H/L", t_end=1.0)),
+     lambda: gnibench.solve("kepler-2d", "scipy-rk45+observer:on=H/L", t_end=1.0), None),
     (["kepler-2d", "rk4", "--steps", "3", "--metrics", "nosuch"],
-     lambda: gnibench.solve("kepler-2d", "rk4", steps=3, metrics="nosuch")),
+     lambda: gnibench.solve("kepler-2d", "rk4", steps=3, metrics="nosuch"), None),
 ])
-def test_errors_are_user_errors_with_the_cli_line(capsys, argv, call):
+def test_errors_are_user_errors_with_the_cli_line(capsys, argv, call, words):
+    """The API raises the command line's line, with the options named as Python names them (the
+    keyword for the flag: ``words``)."""
     assert main(["solve", *argv]) == 2
     line = capsys.readouterr().err.strip()
     with pytest.raises(gnibench.UserError) as e:
         call()
+    for flag, keyword in (words or {}).items():
+        assert flag in line, line
+        line = line.replace(flag, keyword)
     assert line == f"gnibench: error: {e.value}"
 
 
