@@ -307,7 +307,8 @@ def ensemble_work_precision(result, *, measure: str | None = None, problem: str 
     Examples
     --------
     >>> import gnibench
-    >>> res = gnibench.run({"name": "ens", "title": "an ensemble", "t_end": 2.0, "cells": [
+    >>> res = gnibench.run({"name": "ens", "title": "an ensemble", "reference": "[HLW] I.1",
+    ...                     "t_end": 2.0, "cells": [
     ...     {"problems": ["pendulum"], "methods": ["rk4"], "vary": {"h": [0.1, 0.05]},
     ...      "ensemble": {"options": ["q0", "p0"], "sample": "box", "n": 8, "seed": 1,
     ...                   "low": [-1.0, -0.5], "high": [1.0, 0.5]}}]})

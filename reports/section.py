@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from gnibench.reports import interactive, plots, workprecision
+from gnibench.reports import ensembles, interactive, plots, workprecision
 from gnibench.reports.palette import Palette, styles
 from gnibench.reports.setups import contexts, family_names
 

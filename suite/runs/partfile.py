@@ -103,8 +103,9 @@ def record(key: str, payload: bytes) -> bytes:
 def scan(f, segment: str) -> tuple[dict[str, Entry], str]:
     """The records of an open segment file, in order (a later record of a key replaces an earlier
     one), and why the walk stopped before the end ("" when it did not): a record cut short (a
-    run killed while appending it: nothing lost but that cell) or a head that is not one (the
-    records after it cannot be found)."""
+    run killed while appending it: nothing lost but that cell, ``"cut"``), a record written in
+    another format of the store (an older or newer gnibench, ``"format"``) or a head that is not
+    one (``"damaged"``; the records after it cannot be found)."""
     f.seek(0, 2)
     size = f.tell()
     f.seek(0)
@@ -114,8 +115,8 @@ def scan(f, segment: str) -> tuple[dict[str, Entry], str]:
         head = f.read(HEAD)
         if len(head) < HEAD:
             return entries, "cut"
-        if not head.startswith(MAGIC):
-            return entries, "damaged"
+        if not head.startswith(MAGIC):      # another format of the store, or no record head
+            return entries, "format" if head.startswith(MAGIC[:14]) else "damaged"
         key = head[len(MAGIC):len(MAGIC) + KEY]
         digest = head[len(MAGIC) + KEY:len(MAGIC) + KEY + 64]
         length = int.from_bytes(head[-8:], "little")

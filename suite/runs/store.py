@@ -214,6 +214,10 @@ class Store:
             if stop == "damaged":
                 warn(f"stored cells {path.relative_to(self.out)} are damaged after "
                      f"{len(entries)} records; the cells after them are recomputed")
+            elif stop == "format":
+                warn(f"stored cells {path.relative_to(self.out)} cannot be read: after "
+                     f"{len(entries)} records they were written in another format of the store "
+                     f"(not {MAGIC.decode().strip()!r}); their cells are recomputed")
             self._files[path.name] = f
             self._sizes[path.name] = f.seek(0, 2)
             self._index.update(entries)

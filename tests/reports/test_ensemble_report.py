@@ -8,8 +8,9 @@ import pytest
 EXPERIMENT = {
     "name": "ens-league", "title": "ensemble league", "reference": "tests", "t_end": 5.0,
     "cells": [{"problems": ["pendulum"],
-               "methods": [f"{m}:rtol={t},atol={t}" for m in ("dopri5", "dop853")
-                           for t in ("1e-5", "1e-7", "1e-9")],
+               "methods": ["dopri5", "dop853"],
+               "vary": {"rtol": [1e-5, 1e-7, 1e-9], "atol": [1e-5, 1e-7, 1e-9]},
+               "zip": ["rtol", "atol"],                 # a paired sweep: one family per method
                "ensemble": {"options": ["q0", "p0"], "sample": "box", "n": 24, "seed": 2,
                             "low": [-2.5, -1.0], "high": [2.5, 1.0]}}],
 }

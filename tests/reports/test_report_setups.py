@@ -304,4 +304,4 @@ def test_gnibench_plot_is_an_importable_module():
             "print(sorted(gnibench.plot.__all__))\n")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
-    assert out.stdout.strip() == "['global_error', 'invariant_errors', 'work_precision']"
+    assert out.stdout.strip() == "['ensemble_work_precision', 'global_error', 'invariant_errors', 'work_precision']"

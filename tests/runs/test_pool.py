@@ -77,7 +77,7 @@ def test_outcome_columns_make_the_table_of_the_cell():
     assert list(table.columns[:6]) == ["cell", "problem", "method", "t", "steps", "nfev"]
     assert (table["cell"] == cell.id).all() and (table["method"] == cell.method).all()
     for name, values in outcome.samples.items():
-        assert np.array_equal(table[name].to_numpy(), values), name
+        assert np.array_equal(table[name].to_numpy(), values, equal_nan=True), name
 
 
 def test_a_worker_runs_cells_without_pandas():

@@ -4,25 +4,39 @@ one warning and recomputed (a cosmic-ray survivor, issue 41: ``!=`` read as ``>`
 run reuses every stored cell unless asked to run fresh (another survivor: the default of fresh)."""
 from __future__ import annotations
 
-import pandas as pd
+import numpy as np
 import pytest
 from gnibench.suite.runs import store as S
 
 
 @pytest.mark.parametrize("shift", [-1, +1])
 def test_a_part_of_another_format_is_not_reused(tmp_path, monkeypatch, capsys, shift):
+    from gnibench.suite.runs import partfile
+
+    key = "a" * partfile.KEY
+    samples = {"t": np.array([0.0, 1.0]), "q": np.array([1.0, 0.5])}
+    part = S.Part(samples, {"cell": 0, "status": "ok"}, {"cell": 0}, ("q",))
+    own = S.Store(tmp_path / "own").open()
+    try:
+        own.write(key, part)
+    finally:
+        own.close()
+    assert S.Store(tmp_path / "own").open().read(key) is not None          # its own format
+    other = partfile.MAGIC.replace(b"%d" % partfile.FORMAT, b"%d" % (partfile.FORMAT + shift))
+    monkeypatch.setattr(partfile, "MAGIC", other)                          # another gnibench
     st = S.Store(tmp_path / "out").open()
     try:
-        samples = pd.DataFrame({"t": [0.0, 1.0], "q": [1.0, 0.5]})
-        part = S.Part(samples, {"cell": 0, "status": "ok"}, {"cell": 0}, ("q",))
-        st.write("k", part, samples.iloc[:0])
-        assert st.read("k") is not None                                    # its own format
-        fresh = S.Store(tmp_path / "out")                                  # another run
-        monkeypatch.setattr(S, "PART_FORMAT", S.PART_FORMAT - shift)       # the code moved on
-        assert fresh.read("k") is None and not fresh.has("k")
-        assert "cannot be read" in capsys.readouterr().err
+        st.write(key, part)
     finally:
         st.close()
+    monkeypatch.undo()
+    capsys.readouterr()
+    fresh = S.Store(tmp_path / "out").open()                               # this gnibench
+    try:
+        assert fresh.read(key) is None and not fresh.has(key)
+    finally:
+        fresh.close()
+    assert "written in another format of the store" in capsys.readouterr().err
 
 
 def test_run_experiments_reuses_stored_cells_unless_asked_fresh(tmp_path):
