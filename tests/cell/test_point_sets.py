@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import math
 
-from gnibench.suite.cell.spec import parse_problem
 from gnibench.suite.runs.experiment import parse_experiment
 
 
@@ -14,8 +13,10 @@ def test_circle_points_are_evenly_spaced_counterclockwise():
                          '[[cells]]\nproblems = ["pendulum"]\nmethods = ["euler:h=0.1"]\n'
                          '[cells.points]\noptions = ["q0", "p0"]\n'
                          'circle = { center = [0.5, -0.25], radius = 0.1, n = 6 }\n', "c.toml")
-    got = [parse_problem(c.problem).values for c in e.cells]
-    assert len(got) == 6
+    (cell,) = e.cells                                    # a point set is one ensemble cell
+    ens = cell.ensemble
+    got = [dict(zip(ens.options, row)) for row in ens.points]
+    assert len(got) == 6 and ens.sample == "circle"
     for k, v in enumerate(got):
         angle = 2 * math.pi * k / 6
         assert math.isclose(v["q0"], 0.5 + 0.1 * math.cos(angle), abs_tol=1e-15)
