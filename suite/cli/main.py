@@ -10,7 +10,7 @@ import json
 import sys
 from pathlib import Path
 
-from gnibench.suite.foundation.budgets import check_limits
+from gnibench.suite.foundation.budgets import MAX_REPEAT, check_limits
 from gnibench.suite.foundation.errors import UserError
 from gnibench.suite.foundation.numbers import option, parse_float
 from gnibench.suite.foundation.outputs import check_output_dir, check_output_file, fault
@@ -122,7 +122,8 @@ def _parser() -> argparse.ArgumentParser:
                    help="ignore the cells stored by earlier runs in the output directory")
     r.add_argument("--scale", default="paper", metavar="paper|quick",
                    help="the experiment's paper scale (default) or its shortened quick scale")
-    r.add_argument("--repeat", type=option("int", "--repeat"), default=None, metavar="N",
+    r.add_argument("--repeat", type=option("int", "--repeat", high=MAX_REPEAT), default=None,
+                   metavar="N",
                    help="run each cell's timed integration N times after the warm-up (min, "
                         "median and spread in timings.parquet; default: the file's repeat, else 1)")
     _load_option(r)

@@ -26,6 +26,8 @@ from gnibench.suite.foundation.numbers import INT_LIMIT, parse_int
 
 __all__ = ["INT_LIMIT", "check_count", "check_integer", "check_limits", "check_output", "limit"]
 
+#: the most timed runs of one cell (``repeat``: the command line, the API, experiment files)
+MAX_REPEAT = 1000
 _DEFAULTS = {"GNIBENCH_MAX_STEPS": 10 ** 10, "GNIBENCH_MAX_ROWS": 10 ** 7,
              "GNIBENCH_MAX_OUTPUT_MB": 2048, "GNIBENCH_MAX_CELLS": 10 ** 5}
 

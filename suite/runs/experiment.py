@@ -127,7 +127,7 @@ def parse_experiment(text: str, source: str, scale: str = "paper",
 
 def check_repeat(value, name: str = "repeat") -> int:
     """A number of timed runs per cell: an integer from 1 to MAX_REPEAT."""
-    from gnibench.suite.runs.report_schema import MAX_REPEAT
+    from gnibench.suite.foundation.budgets import MAX_REPEAT
 
     if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= MAX_REPEAT:
         raise UserError(f"bad {named(name, repr(value))}; allowed: an integer from 1 to {MAX_REPEAT}")
@@ -330,8 +330,8 @@ def _expand(group: Group, gi: int, defaults: ExperimentFile, where: str, first_i
                 if ensemble is not None and pspec not in sets:
                     from gnibench.suite.runs.ensemble_spec import make
 
-                    sets[pspec] = make(ensemble, spec.problem, f"{where}: "
-                                       + ("points" if group.points is not None else "ensemble"))
+                    sets[pspec] = make(ensemble, spec.problem,      # under ``here``, below
+                                       "points" if group.points is not None else "ensemble")
             except UserError as e:
                 raise UserError(f"{here}: {e}") from None
             parsed_problems.append(spec.problem)

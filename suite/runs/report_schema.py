@@ -21,10 +21,10 @@ from __future__ import annotations
 import re
 from typing import Annotated, Literal
 
+from gnibench.suite.foundation.budgets import MAX_REPEAT  # noqa: F401 - re-exported
 from gnibench.suite.foundation.records import Allowed, Line, Positive, Record, key, refuse
 from pydantic import AfterValidator, Field
 
-MAX_REPEAT = 1000
 FIGURES = ("invariants", "global-error", "eta", "sections", "work-precision", "league")
 COSTS = ("nfev", "wall")
 #: an error measure of cells.parquet a work-precision diagram can draw

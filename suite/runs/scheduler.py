@@ -24,6 +24,7 @@ in it can hang the command.
 from __future__ import annotations
 
 import contextlib
+import contextvars
 import logging
 import pickle
 import socket
@@ -112,7 +113,10 @@ def _in_thread(fn, seconds: float):
         except BaseException as e:  # noqa: BLE001 - carried to the caller
             box["error"] = e
 
-    thread = threading.Thread(target=target, name="gnibench-scheduler-probe", daemon=True)
+    # the caller's context (errors.EDGE: a message names the option as the caller gave it)
+    context = contextvars.copy_context()
+    thread = threading.Thread(target=context.run, args=(target,), name="gnibench-scheduler-probe",
+                              daemon=True)
     thread.start()
     thread.join(seconds)
     if thread.is_alive():

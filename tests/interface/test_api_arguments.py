@@ -110,6 +110,9 @@ def test_values_are_checked_below_in_the_words_of_the_caller():
     (["solve", "kepler-2d", "rk4", "--steps", "0"], "bad --steps 0; allowed"),
     (["solve", "kepler-2d", "rk4", "--t-end", "-1"], "bad --t-end -1; allowed"),
     (["run", "quick", "-j", "0"], "bad -j 0; allowed"),
+    (["run", "quick", "--repeat", "0"], "bad --repeat 0; allowed: an integer from 1 to 1000"),
+    (["run", "quick", "--executor", "dask", "--scheduler", "tcp://127.0.0.1:1"],   # in a thread
+     "bad --scheduler 'tcp://127.0.0.1:1': cannot connect"),
 ])
 def test_the_command_line_names_its_flags(argv, line, capsys):
     from gnibench.suite.cli.main import main
