@@ -215,9 +215,11 @@ def test_verify_is_the_cli(tmp_path, capsys):
     assert ledger["verdict"].tolist() == [r["verdict"] for r in rows]
 
 
-def test_docs_python_examples_run(capsys):
+def test_docs_python_examples_run(capsys, tmp_path, monkeypatch):
     """The Python blocks of the documentation's how-to pages that are not executed notebooks
-    (the notebooks run when the documentation builds), run as they are, so they stay true."""
+    (the notebooks run when the documentation builds), run as they are, so they stay true (in a
+    directory of their own: they write files, e.g. global-error.png)."""
+    monkeypatch.chdir(tmp_path)
     pages = sorted((ROOT / "docs" / "how-to").glob("*.md"))
     blocks = []
     for page in pages:
