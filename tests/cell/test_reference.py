@@ -147,6 +147,29 @@ def test_second_request_reads_the_cached_file(long_run, monkeypatch):
     assert cache_path(parse_problem("kepler-2d:e=0.5"), t, sol.spec) != path
 
 
+def test_every_field_of_a_reference_changes_its_cache_file():
+    """The cache file of an integrated reference is named by everything its numbers depend on:
+    backend, precision, tolerance, grid and problem (with its options); a cell asking for one
+    reference never reads another's file (nothing is integrated here)."""
+    from gnibench.suite.cell.reference import ReferenceSpec
+
+    problem, t = parse_problem("kepler-2d"), np.linspace(0.0, 1.0, 5)
+    base = ReferenceSpec("heyoka", "double", 1e-15)
+    variants = {
+        "precision": (problem, t, ReferenceSpec("heyoka", "long double", 1e-15)),
+        "precision real128": (problem, t, ReferenceSpec("heyoka", "real128", 1e-15)),
+        "tol": (problem, t, ReferenceSpec("heyoka", "double", 1e-14)),
+        "backend": (problem, t, ReferenceSpec("rebound", "double", 1e-15)),
+        "grid": (problem, t[:-1], base),
+        "grid values": (problem, np.where(t == 0.75, np.nextafter(0.75, 1.0), t), base),  # 1 ulp
+        "problem option": (parse_problem("kepler-2d:e=0.5"), t, base),
+    }
+    path = cache_path(problem, t, base)
+    assert cache_path(problem, t.copy(), ReferenceSpec("heyoka", "double", 1e-15)) == path
+    for field, args in variants.items():
+        assert cache_path(*args) != path, field
+
+
 def test_long_double_full_output(tmp_path, monkeypatch):
     monkeypatch.setenv("GNIBENCH_CACHE_DIR", str(tmp_path))
     problem = parse_problem("kepler-2d")
