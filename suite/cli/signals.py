@@ -14,8 +14,9 @@ ctypes callbacks: a Ctrl-C during a cold compile was swallowed there, the compil
 failed later with numba's state half-updated) and the integration ran for hours. So the handler
 does not raise while the main thread is inside numba or llvmlite (it marks the signal pending),
 a KeyboardInterrupt dropped anywhere else marks it pending too (``sys.unraisablehook``), and a
-watchdog thread delivers a pending signal again as soon as the main thread is back in our own
-code.
+watchdog thread delivers a pending signal again every ``POLL`` seconds: the handler, which
+Python gives the main thread's frame, raises it once that frame is back in our own code (no
+other thread's frames are inspected).
 
 Late. The watchdog also sleeps on the signal wakeup fd, which the C-level handler writes at
 once: when a signal has not been raised in the main thread ``GRACE`` seconds after it came (a
@@ -124,10 +125,6 @@ def _hard_exit(signum: int) -> None:
     os._exit(128 + signum)
 
 
-def _main_frame():
-    return sys._current_frames().get(threading.main_thread().ident)
-
-
 def _watch(read_fd: int) -> None:
     """Deliver pending signals again; hard exit when one is not raised within GRACE seconds.
     The thread owns ``read_fd`` and closes it when it ends: closed by another thread while this
@@ -161,11 +158,12 @@ def _watch_fd(read_fd: int) -> None:
         if signum is not None:
             if now - origin > GRACE:
                 _hard_exit(signum)
-            if not _unsafe(_main_frame()):
-                with _state.lock:
-                    _state.pending = None
-                came = (signum, now)
-                signal.pthread_kill(threading.main_thread().ident, signum)
+            # delivered again; the handler, given the main thread's frame, raises only outside
+            # numba and llvmlite and marks it pending again inside them (origin kept)
+            with _state.lock:
+                _state.pending = None
+            came = (signum, now)
+            signal.pthread_kill(threading.main_thread().ident, signum)
             continue
         if came is not None and now - came[1] > GRACE:
             _hard_exit(came[0])
