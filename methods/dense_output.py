@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from fractions import Fraction
 
 from gnibench.methods import order_conditions as oc
-from gnibench.methods.tableau import lit, require, verdict
+from gnibench.methods.tableau import require, verdict
 
 # -- order conditions (trees and densities: methods/order_conditions.py) -------------------------
 
