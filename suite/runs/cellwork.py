@@ -41,7 +41,9 @@ class CellOutcome:
 
 
 def _throttled(cell_id: int, report) -> Callable[[float], None]:
-    last = [0.0]
+    """``report`` at most once every ``REPORT_SECONDS``, the first time that long after the cell
+    started (a short cell sends none: no message nor wakeup of the parent per cell)."""
+    last = [time.monotonic()]
 
     def progress(fraction: float) -> None:
         now = time.monotonic()

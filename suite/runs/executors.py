@@ -4,8 +4,9 @@ Every executor takes the cells to compute, grouped by compiled kernel
 (:func:`gnibench.suite.runs.cellwork.kernel_plan`), and yields their
 :class:`~gnibench.suite.runs.cellwork.CellOutcome` as they finish, in any order (the tables are
 assembled in cell order afterwards, so they do not depend on the executor or the number of
-workers). The first cell of each group runs before the rest of its group: it compiles the kernel
-once, into the disk cache, and the other cells, wherever they run, load it. Compiles of different
+workers). The first cell of each group whose kernel is not in the disk cache yet runs before the
+rest of its group: it compiles the kernel once, into the disk cache, and the other cells, wherever
+they run, load it (a group whose kernel is there already runs at once). Compiles of different
 kernels run in parallel, in the order of the groups: the runner puts the kernels not compiled yet
 first, the costliest first (:func:`gnibench.suite.runs.runner._groups`).
 
@@ -70,28 +71,29 @@ def start(executor: str, jobs: int | None, cells: int | None = None):
 
 def run(groups: list[list], executor: str = "local", jobs: int | None = None,
         scheduler: str | None = None, progress: Progress | None = None,
-        pool=None) -> Iterator[CellOutcome]:
+        pool=None, warm: list[bool] | None = None) -> Iterator[CellOutcome]:
     """Run the cells of ``groups``: an iterator of their outcomes as they finish (``pool``: the
     local pool of :func:`start`, whose workers get their first cells at once; else one is started
-    here when needed)."""
+    here when needed; ``warm[i]``: the kernel of ``groups[i]`` is in the disk cache already, so
+    its cells need not wait for its first one)."""
     total = sum(len(g) for g in groups)
     jobs = max(1, workers(jobs, total))
     if executor == "dask":
-        return _dask(groups, jobs, scheduler)
+        return _dask(groups, jobs, scheduler, warm)
     if pool is not None and total:
-        return pool.run(groups, progress)
+        return pool.run(groups, progress, warm)
     if jobs == 1 or total <= 1:
         return _serial(groups, progress)
-    return _own_pool(groups, executor, jobs, total, progress)
+    return _own_pool(groups, executor, jobs, total, progress, warm)
 
 
-def _own_pool(groups, executor, jobs, total, progress) -> Iterator[CellOutcome]:
+def _own_pool(groups, executor, jobs, total, progress, warm) -> Iterator[CellOutcome]:
     own = start(executor, jobs, total)
     if own is None:
         yield from _serial(groups, progress)
         return
     with own:
-        yield from own.run(groups, progress)
+        yield from own.run(groups, progress, warm)
 
 
 def _serial(groups, progress) -> Iterator[CellOutcome]:
@@ -131,7 +133,7 @@ def _quiet_logger(name: str):
         logger.setLevel(level)
 
 
-def _dask(groups, jobs, scheduler) -> Iterator[CellOutcome]:
+def _dask(groups, jobs, scheduler, warm=None) -> Iterator[CellOutcome]:
     from distributed import Client, LocalCluster, as_completed
 
     cluster = None
@@ -168,10 +170,10 @@ def _dask(groups, jobs, scheduler) -> Iterator[CellOutcome]:
                             f"({type(e).__name__}: {e})") from None
     try:
         waiting, cells = {}, {}        # pure=False: fresh keys, never a result of another run
-        for g in groups:
-            if g:
-                fut = client.submit(run_cell, g[0], pure=False)
-                waiting[fut], cells[fut.key] = g[1:], g[0]
+        for g, ready in zip(groups, warm or [False] * len(groups)):
+            for cell in g if ready else g[:1]:         # a kernel to compile: its first cell alone
+                fut = client.submit(run_cell, cell, pure=False)
+                waiting[fut], cells[fut.key] = [] if ready else g[1:], cell
         pending = as_completed(list(waiting))
         for fut in pending:
             for cell in waiting.pop(fut, []):

@@ -9,27 +9,31 @@ and keep the kernels they loaded.
   then forks the others from itself, ready at once. Once the cells to compute are known the pool is fitted to them (:meth:`Pool.fit`:
   idle workers beyond their number end, more are forked when ``-j`` asks for more than the
   cores). The workers are children of the command, so a signal to it or its death ends them.
-* **By kernel, in the order given, longest first, one cell queued ahead.** Each worker has its
-  own pipe and holds the cell it runs and the next one (while there are cells enough for all
-  workers), so that it never waits for the parent (busy storing a result, or not scheduled on a
-  loaded machine) between two cells. The first cell of a kernel group runs alone (it compiles
-  the kernel into the disk cache); once it is done, the rest of the group goes preferably to the
-  worker that ran it (the kernel is loaded there), a free worker takes the next group not yet
-  started (kernels compile in parallel), and only then helps with the largest group under way
-  (it loads the kernel from the disk cache). Within a group the longest cells go first
-  (:func:`longest_first`), so that short ones fill the end of the run.
+* **By kernel, in batches, one batch queued ahead.** Which cells a free worker runs next is the
+  plan's (:mod:`gnibench.suite.runs.plan`: kernel groups, affinity, longest first, batches sized
+  from the measured cost of a group's cells). Each worker has its own pipe and holds the batch it
+  runs and the next one (while there are cells enough for all workers), so that it never waits
+  for the parent (busy storing a result, or not scheduled on a loaded machine) between two
+  batches. A worker sends the outcomes of its finished cells together, at the end of a batch or
+  after ``SEND_SECONDS`` (so that neither side pays a message, nor the parent a wakeup, per
+  cell), without their cells (the parent has them: it matches the outcomes to the cells it sent,
+  in order).
 * **Quiet workers** (:func:`gnibench.suite.foundation.processes.quiet_worker`): SIGINT ignored
   (Ctrl-C reaches the whole process group: the parent decides), SIGTERM ends them, they die with
   their parent. A worker reports the progress of a long cell through its pipe. When the run ends
   otherwise than by its last cell (Ctrl-C, SIGTERM, an error) the workers are terminated at once.
   A worker that dies (killed, out of memory) ends the run with one line naming the cell it was
-  running (:class:`~gnibench.suite.foundation.outputs.Fault`); the cells stored so far stay.
+  running (:class:`~gnibench.suite.foundation.outputs.Fault`; each worker counts the cells it
+  started in a word of memory shared with the parent); the cells whose outcomes arrived are
+  stored and stay (those it finished in the last ``SEND_SECONDS`` before it died are computed
+  again by the next run).
 
 Which worker runs a cell never changes its numbers: the tables are assembled in cell order.
 """
 from __future__ import annotations
 
 import contextlib
+import mmap
 import os
 import signal
 import sys
@@ -38,13 +42,15 @@ from collections import deque
 
 from gnibench.suite.foundation.outputs import Fault
 from gnibench.suite.foundation.processes import children, quiet_worker, reap_strays
+from gnibench.suite.runs.plan import Plan, longest_first  # noqa: F401 - part of this interface
 
 POLL_SECONDS = 0.2
 PR_SET_CHILD_SUBREAPER = 36
 SAFETY_SECONDS = 600.0    # a forked worker says its pid within this (a hang only reaches it)
 GONE = 0                  # the pid of a worker already reaped
 BLOCKED = {signal.SIGINT, signal.SIGTERM}
-AHEAD = 2                 # cells sent to a worker at a time: the one it runs and the next
+AHEAD = 2                 # batches sent to a worker at a time: the one it runs and the next
+SEND_SECONDS = 0.05       # a worker sends its finished outcomes at least this often
 
 
 def default_jobs() -> int:
@@ -83,15 +89,18 @@ def preload() -> None:
     import gnibench.suite.runs.cellwork
     import gnibench.suite.runs.tables  # noqa: F401
     import numba
+    import scipy.special  # noqa: F401 - exact solutions (elliptic functions): 0.15 s a process
 
     # numba sets up its CPU target (typing and lowering registries) at its first compilation:
     # a tiny function compiled here, through numba's public API, pays that before the fork
     numba.njit(lambda x: x + 1.0)(1.0)
 
 
-def _serve(conn, others: list, parent: int, ready: bool = False) -> None:
-    """A worker: cells in, ("o", outcome) and ("p", cell id, fraction done) out, until None
-    (``ready``: forked from a worker that preloaded)."""
+def _serve(end, others: list, parent: int, ready: bool = False) -> None:
+    """A worker: batches of cells in, ("o", outcomes, seconds) and ("p", cell id, fraction done)
+    out, until None (``end``: its pipe and its shared counter of cells started; ``ready``: forked
+    from a worker that preloaded)."""
+    conn, slot = end
     _quiet(parent)
     for other in others:                  # the other ends of the pipes it does not serve
         other.close()
@@ -105,34 +114,46 @@ def _serve(conn, others: list, parent: int, ready: bool = False) -> None:
     if not ready:
         with contextlib.suppress(Exception):          # a failed preload: the first cell says why
             preload()
+    started = 0
     while True:
         try:
-            cell = conn.recv()
+            batch = conn.recv()
         except (EOFError, OSError):
             return
-        if cell is None:
+        if batch is None:
             return
-        conn.send(("o", run_cell(cell)))
+        finished, since = [], time.perf_counter()
+        for k, cell in enumerate(batch):
+            started += 1
+            slot[:8] = started.to_bytes(8, "little")     # which cell it runs, if it dies
+            outcome = run_cell(cell)
+            outcome.cell = None                          # the parent has it
+            finished.append(outcome)
+            now = time.perf_counter()
+            if k == len(batch) - 1 or now - since >= SEND_SECONDS:
+                conn.send(("o", finished, now - since))
+                finished, since = [], now
 
 
 def _first(mine, rest: list, others: list, parent: int) -> None:
     """The first worker of a batch: it preloads, forks the rest of the batch from itself (ready at
     once; each through a short-lived middle process, so that the command adopts it), then serves.
-    """
+    ``mine`` and each of ``rest``: a pipe and its shared counter."""
     _quiet(parent)
     for other in others:
         other.close()
     with contextlib.suppress(Exception):
         preload()
     for child in rest:
-        middle = _fork(_adopted, child, [mine] + [c for c in rest if c is not child], parent)
+        middle = _fork(_adopted, child, [mine[0]] + [c[0] for c in rest if c is not child],
+                       parent)
         with contextlib.suppress(ChildProcessError):
             os.waitpid(middle, 0)
-        child.close()
+        child[0].close()
     _serve(mine, [], parent, ready=True)
 
 
-def _adopted(conn, others: list, parent: int) -> None:
+def _adopted(end, others: list, parent: int) -> None:
     """In the middle process: fork the worker and end, so that the worker is adopted by the
     command (its child subreaper); the worker says its pid first."""
     if os.fork():
@@ -141,8 +162,8 @@ def _adopted(conn, others: list, parent: int) -> None:
     while middle != parent and os.getppid() == middle:    # the middle process is ending
         time.sleep(0.001)
     _quiet(parent)                                        # adopted by another: it ends here
-    conn.send(("pid", os.getpid()))
-    _serve(conn, others, parent, ready=True)
+    end[0].send(("pid", os.getpid()))
+    _serve(end, others, parent, ready=True)
 
 
 def _subreaper(on: bool) -> bool:
@@ -197,6 +218,8 @@ class Pool:
     def __init__(self, workers: int):
         self.size = workers
         self.conns: list = []
+        self.slots: list = []                     # per worker: the cells it started (shared)
+        self.received: list[int] = []             # per worker: the outcomes it sent
         self.pids: list[int | None] = []         # None: adopted, its pid not heard yet; GONE
         self.leaving: list = []                   # (conn, pid) of workers told to end
         self.plan, self.sent = None, {}
@@ -212,7 +235,8 @@ class Pool:
         if missing <= 0:
             return self
         pairs = [Pipe() for _ in range(missing)]
-        theirs = [child for _, child in pairs]
+        slots = [mmap.mmap(-1, 8) for _ in range(missing)]     # shared with the forked worker
+        theirs = [(child, slot) for (_, child), slot in zip(pairs, slots)]
         ours = [conn for conn, _ in pairs]
         if not self.reaping:
             self.before = children()
@@ -222,11 +246,13 @@ class Pool:
             self.pids += [pid] + [None] * (missing - 1)
         else:
             for k, child in enumerate(theirs):
-                others = self.conns + ours + theirs[:k] + theirs[k + 1:]
+                others = self.conns + ours + [c for c, _ in theirs[:k] + theirs[k + 1:]]
                 self.pids.append(_fork(_serve, child, others, os.getpid()))
-        for child in theirs:
+        for child, _ in theirs:
             child.close()
         self.conns += ours
+        self.slots += slots
+        self.received += [0] * missing
         return self
 
     def started(self) -> list[int]:
@@ -252,16 +278,19 @@ class Pool:
                     conn.send(None)
             self.leaving.append((conn, pid))
         self.conns, self.pids = self.conns[:workers], self.pids[:workers]
+        self.slots, self.received = self.slots[:workers], self.received[:workers]
         self.size = workers
         return self.start()
 
-    def run(self, groups: list[list], progress=None):
-        """Run the cells of ``groups`` (lists of cells sharing a kernel, in cell order): the first
-        cells go to the workers now, and the iterator returned yields the outcomes as they
+    def run(self, groups: list[list], progress=None, warm: list[bool] | None = None):
+        """Run the cells of ``groups`` (lists of cells sharing a kernel, in cell order; ``warm``:
+        which groups' kernels are in the disk cache, :class:`~gnibench.suite.runs.plan.Plan`): the
+        first cells go to the workers now, and the iterator returned yields the outcomes as they
         finish; ``progress(cell_id, fraction)`` hears of long cells. If the caller stops early
         (an exception, Ctrl-C, ``close()``), the workers are terminated."""
-        self.plan = Plan(groups)
+        self.plan = Plan(groups, warm)
         self.sent = {w: deque() for w in range(self.size)}     # worker -> its cells, in order
+        self.batches = {w: deque() for w in range(self.size)}  # worker -> its batches' sizes
         try:
             self._top_up(0)
         except BaseException:
@@ -279,7 +308,7 @@ class Pool:
                     try:
                         message = conn.recv()
                     except (EOFError, OSError):
-                        raise self._died(w, self.sent[w][0]) from None
+                        raise self._died(w) from None
                     if message[0] == "pid":
                         self.pids[w] = message[1]
                         continue
@@ -287,33 +316,53 @@ class Pool:
                         if progress is not None:
                             progress(message[1], message[2])
                         continue
-                    cell = self.sent[w].popleft()
-                    self.plan.done(cell)
+                    outcomes, seconds = message[1], message[2]
+                    cells = [self.sent[w].popleft() for _ in outcomes]
+                    self.received[w] += len(cells)
+                    self._finished(w, len(cells))
+                    self.plan.measured(cells, seconds)
+                    for cell in cells:
+                        self.plan.done(cell)
                     self._top_up(w)
-                    outcome = message[1]
-                    outcome.cell = cell       # the caller's own cell, not the worker's copy
-                    yield outcome
+                    for outcome, cell in zip(outcomes, cells):
+                        outcome.cell = cell   # the caller's own cell (the worker sends none)
+                        yield outcome
         except BaseException:
             self.stop(now=True)
             raise
 
+    def _finished(self, w: int, n: int) -> None:
+        """``n`` more cells of worker ``w`` are done: its batches done are off its queue."""
+        batches = self.batches[w]
+        while n and batches:
+            k = min(n, batches[0])
+            n -= k
+            batches[0] -= k
+            if not batches[0]:
+                batches.popleft()
+
     def _top_up(self, first: int) -> None:
-        """Give every worker (``first`` first) a cell to run and, while there are cells enough
+        """Give every worker (``first`` first) a batch to run and, while there are cells enough
         for all, one queued behind it (so that a worker never waits for this process between
-        two cells; near the end the last cells go to whoever is free)."""
+        two batches; near the end the last cells go to whoever is free)."""
         for w in [first] + [v for v in range(self.size) if v != first]:
-            cells = self.sent[w]
-            while len(cells) < (AHEAD if self.plan.left >= self.size else 1):
-                cell = self.plan.next_for(w)
-                if cell is None:
+            batches = self.batches[w]
+            while len(batches) < (AHEAD if self.plan.left >= self.size else 1):
+                cells = self.plan.batch(w, self.size)
+                if not cells:
                     break
                 try:
-                    self.conns[w].send(cell)
+                    self.conns[w].send(cells)
                 except OSError:                       # it died while idle
-                    raise self._died(w, cells[0] if cells else cell) from None
-                cells.append(cell)
+                    self.sent[w].extend(cells)
+                    raise self._died(w) from None
+                self.sent[w].extend(cells)
+                batches.append(len(cells))
 
-    def _died(self, w: int, cell) -> Fault:
+    def _died(self, w: int) -> Fault:
+        """The fault of worker ``w``'s death, naming the cell it was running: the one after the
+        cells whose outcomes arrived and those it finished since (by its count of the cells it
+        started; the next cell it was sent if it died between two)."""
         how = ""
         with contextlib.suppress(ChildProcessError, OSError, TypeError):
             pid, status = os.waitpid(self._pid(w, 0.0), 0)
@@ -322,9 +371,13 @@ class Pool:
                 how = f" (signal {signal.Signals(os.WTERMSIG(status)).name})"
             elif pid and os.WIFEXITED(status):
                 how = f" (exit code {os.WEXITSTATUS(status)})"
-        return Fault(f"a worker of the pool died{how} while running cell {cell.id} "
-                     f"({cell.problem} {cell.method}); the cells finished so far are stored: run "
-                     f"the same command again to compute the rest")
+        sent = self.sent[w]
+        running = int.from_bytes(self.slots[w][:8], "little") - self.received[w] - 1
+        cell = sent[min(max(running, 0), len(sent) - 1)] if sent else None
+        what = f"cell {cell.id} ({cell.problem} {cell.method})" if cell is not None else "a cell"
+        return Fault(f"a worker of the pool died{how} while running {what}; the cells whose "
+                     f"outcomes arrived are stored: run the same command again to compute the "
+                     f"rest")
 
     def stop(self, now: bool = False) -> None:
         """End the workers: ``now`` terminates them (Ctrl-C, an error), else they are told to end
@@ -349,6 +402,7 @@ class Pool:
                     os.waitpid(pid, 0)
             conn.close()
         self.conns, self.pids, self.leaving = [], [], []
+        self.slots, self.received = [], []
         if self.reaping:             # middle processes adopted after their parent was killed
             reap_strays(self.before)
             _subreaper(False)
@@ -376,57 +430,3 @@ def _read_pid(conn, wait: float) -> int | None:
     except (EOFError, OSError):
         pass
     return None
-
-
-def _planned_steps(cell) -> int:
-    try:
-        return int(cell.spec.nsteps)
-    except Exception:  # noqa: BLE001 - an estimate only
-        return 0
-
-
-def longest_first(group: list) -> list:
-    """A kernel group's cells, the longest first (so that short cells fill the end of the run):
-    by planned steps (the cells of a group run one kernel: the same cost per step), ties (adaptive
-    methods) in reverse cell order (a sweep lists its coarsest step or loosest tolerance first)."""
-    backwards = list(reversed(group))               # sorted is stable: ties stay backwards
-    return sorted(backwards, key=lambda c: -_planned_steps(c))
-
-
-class Plan:
-    """Which cell a free worker runs next (see the module docstring: kernel groups, affinity)."""
-
-    def __init__(self, groups: list[list]):
-        self.waiting = [deque(longest_first(g)) for g in groups if g]      # not started
-        self.open: list[deque] = []                          # compiled, cells left
-        self.compiling: dict[int, deque] = {}                # id(first cell) -> rest of its group
-        self.home: dict[int, deque] = {}                     # worker -> the group it loaded
-        self.left = sum(len(g) for g in groups)              # cells not handed out yet
-
-    def next_for(self, w: int):
-        cell = self._next_for(w)
-        if cell is not None:
-            self.left -= 1
-        return cell
-
-    def _next_for(self, w: int):
-        group = self.home.get(w)
-        if group:                                             # its kernel is loaded here
-            return group.popleft()
-        if self.waiting:                                      # compile another kernel
-            group = self.waiting.pop(0)
-            first = group.popleft()
-            self.compiling[id(first)] = group
-            self.home[w] = group
-            return first
-        self.open = [g for g in self.open if g]
-        if self.open:                                         # help the largest group left
-            group = max(self.open, key=len)
-            self.home[w] = group
-            return group.popleft()
-        return None
-
-    def done(self, cell) -> None:
-        group = self.compiling.pop(id(cell), None)
-        if group is not None and group:
-            self.open.append(group)

@@ -36,8 +36,11 @@ experiments it holds), at the end, and on Ctrl-C; unfinished cells appear with s
 ``pending`` and ``complete: false``.
 
 A cell that raises (anything but a KeyboardInterrupt) gets status ``error`` with the exception
-type and message as reason, and the run goes on. Bad input never reaches this point: the whole
-experiment and the executor options are validated first and nothing is written when that fails.
+type and message as reason, and the run goes on. A worker process that dies (killed, out of memory)
+ends the run with one line naming its cell; the tables are written as on Ctrl-C (the cells whose
+outcomes arrived, the others ``pending``), and the same command computes the rest. Bad input never
+reaches this point: the whole experiment and the executor options are validated first and nothing
+is written when that fails.
 """
 from __future__ import annotations
 
@@ -48,7 +51,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from gnibench.suite.foundation.cache import atomic_write
-from gnibench.suite.foundation.outputs import fault
+from gnibench.suite.foundation.outputs import Fault, fault
 from gnibench.suite.foundation.provenance import versions
 from gnibench.suite.foundation.status import Status
 from gnibench.suite.runs import executors
@@ -152,8 +155,9 @@ def run_experiments(experiments: list[Experiment], outs: list[Path], store_root:
         # --fresh again would ignore what this run stores
         again = "run it again without --fresh" if fresh else "run the same command again"
         # the pool's workers get their first cells now; the tables' writers are made meanwhile
-        outcomes = executors.run(_groups(todo), executor, jobs, scheduler, progress.cell_progress,
-                                 pool)
+        groups, warm = _planned(todo)
+        outcomes = executors.run(groups, executor, jobs, scheduler, progress.cell_progress,
+                                 pool, warm)
         writers: list[Consolidator] = []
         try:
             with contextlib.closing(outcomes):      # an error stops the workers at once
@@ -179,6 +183,12 @@ def run_experiments(experiments: list[Experiment], outs: list[Path], store_root:
                     w.flush(done)
             print(f"gnibench: interrupted: {len(done)} of {len(unique)} cells are stored in "
                   f"{store_root}; {again} to compute the rest", file=log, flush=True)
+            raise
+        except Fault:                 # a worker died: what is stored stays, the rest pending
+            progress.close()
+            with contextlib.suppress(OSError):
+                for w in writers:
+                    w.flush(done)
             raise
         except OSError as e:          # the disk filled up, say: what is stored stays
             raise fault(e, "the run", f"{len(done)} of {len(unique)} cells are stored in "
@@ -210,13 +220,19 @@ def _groups(cells) -> list[list]:
     takes a few tenths of a second to ten seconds, and a costly kernel left to the end of a run
     is compiled while the other workers have nothing left to do), then the others in cell
     order. Which worker runs a cell never changes its numbers."""
+    return _planned(cells)[0]
+
+
+def _planned(cells) -> tuple[list[list], list[bool]]:
+    """:func:`_groups`, and whether each group's kernel is in the disk cache already (its cost
+    0: its cells need not wait for a first one to compile it)."""
     groups: dict[str, list] = {}
     cost: dict[str, int] = {}
     for c in cells:
         key, cost[key] = kernel_plan(c)
         groups.setdefault(key, []).append(c)
     order = sorted(groups, key=lambda k: -cost[k])       # stable: ties stay in cell order
-    return [groups[k] for k in order]
+    return [groups[k] for k in order], [cost[k] == 0 for k in order]
 
 
 def _part(o: CellOutcome) -> Part:
