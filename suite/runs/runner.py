@@ -164,6 +164,7 @@ def run_experiments(experiments: list[Experiment], outs: list[Path], store_root:
                 costs: dict = {}
                 writers += [Consolidator(e, store, out, summarize, k, costs)
                             for e, out, k in zip(experiments, outs, keys)]
+                _table_libraries()
                 for outcome in outcomes:
                     key = key_of.get(id(outcome.cell)) or cell_key(outcome.cell)
                     store.write(key, _part(outcome))
@@ -196,6 +197,14 @@ def run_experiments(experiments: list[Experiment], outs: list[Path], store_root:
         finally:
             progress.close()
     return outs
+
+
+def _table_libraries() -> None:
+    """Import what the tables are written with (pandas, pyarrow: a third of a second), once the
+    pool's workers have their first cells: this process waits for them meanwhile (their start-up
+    takes longer than the experiment's reading), instead of after the last cell."""
+    import pandas  # noqa: F401
+    import pyarrow.parquet  # noqa: F401
 
 
 def work_units(cell) -> list:
