@@ -25,6 +25,13 @@ the same exit code. Nothing finished is lost: every result file and stored cell 
 an atomic rename (a temporary file may remain, removed by the next run), and pool workers die
 with their parent (:mod:`gnibench.suite.runs.executors`).
 
+Turned into other errors. A C extension's module init that a KeyboardInterrupt interrupts
+returns an error the interpreter reports as ``SystemError: ... returned a result with an
+exception set`` (seen when a signal came while pandas was first imported, to write a run's
+tables: a traceback and exit code 1). An exception that ends the command with a KeyboardInterrupt
+in its chain after a signal came is that signal (:func:`handling`; the console script does the
+same during its imports).
+
 Forks. A forked child inherits the C-level handler and the wakeup fd: a signal that reaches it
 before its after-fork hook has reset them is written into the parent's pipe, and the parent's
 watchdog, seeing a signal its own main thread never raises, ends the parent after GRACE (seen:
@@ -44,7 +51,7 @@ import sys
 import threading
 import time
 
-from gnibench.suite.foundation.guard import signal_received, watch_signals
+from gnibench.suite.foundation.guard import from_interrupt, signal_received, watch_signals
 
 GRACE = 1.0                 # seconds the main thread has to raise a signal before a hard exit
 POLL = 0.02                 # how often the watchdog looks while a signal is pending
@@ -237,6 +244,10 @@ def handling():
     watcher.start()
     try:
         yield
+    except Exception as e:
+        if _state.received and from_interrupt(e):     # see "Turned into other errors"
+            raise KeyboardInterrupt from None
+        raise
     finally:
         with _state.lock:
             _state.active = False

@@ -1,0 +1,92 @@
+"""Interruptions at the edges of a command (issue 43 item 4): a signal that a library turns into
+another error, and a hard exit while a results directory is locked.
+
+Each test sends its signal from inside the process at a chosen point (a deterministic hook),
+never after a delay.
+"""
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+
+SAFETY = 300.0
+
+# A library catches the KeyboardInterrupt of a SIGINT and raises another error from it, as a C
+# extension's module init does (pandas: "SystemError: ... returned a result with an exception
+# set", seen when the signal came while the tables' writer first imported pandas).
+TURNED_IN_THE_COMMAND = """
+import os, signal, sys
+from gnibench.suite.cli import entry, main
+
+def command(a):
+    try:
+        os.kill(os.getpid(), signal.{sig})
+        signal.pause()
+    except KeyboardInterrupt as e:
+        raise SystemError("<class '__pyx_defaults'> returned a result with an exception set") from e
+
+main._list = command
+sys.argv = ["gnibench", "list", "methods"]
+entry.main()
+"""
+
+# The same during the console script's own imports (before the command's handlers).
+TURNED_IN_THE_IMPORTS = """
+import os, signal, sys
+from gnibench.suite.cli import entry
+
+class Finder:                   # the command line's module is imported: the signal comes, and
+    def find_spec(self, name, path=None, target=None):      # its import fails from it
+        if name == "gnibench.suite.cli.main":
+            try:
+                os.kill(os.getpid(), signal.SIGINT)
+                signal.pause()
+            except KeyboardInterrupt as e:
+                raise SystemError("returned a result with an exception set") from e
+        return None
+
+sys.meta_path.insert(0, Finder())
+entry.main()
+"""
+
+
+@pytest.mark.parametrize("sig,code,line", [("SIGINT", 130, "gnibench: interrupted"),
+                                           ("SIGTERM", 143, "gnibench: terminated")])
+def test_an_interrupt_turned_into_another_error_is_the_interrupt(sig, code, line):
+    out = subprocess.run([sys.executable, "-c", TURNED_IN_THE_COMMAND.format(sig=sig)],
+                         check=False, capture_output=True, text=True, timeout=SAFETY)
+    assert (out.returncode, out.stderr.strip()) == (code, line), out.stderr[-3000:]
+
+
+def test_an_interrupt_turned_into_another_error_during_the_imports_is_the_interrupt():
+    out = subprocess.run([sys.executable, "-c", TURNED_IN_THE_IMPORTS], check=False,
+                         capture_output=True, text=True, timeout=SAFETY)
+    assert (out.returncode, out.stderr.strip()) == (130, "gnibench: interrupted"), \
+        out.stderr[-3000:]
+
+
+AN_ERROR_AFTER_THE_INTERRUPT = """
+import os, signal, sys
+from gnibench.suite.cli import entry, main
+
+def command(a):
+    try:
+        os.kill(os.getpid(), signal.SIGINT)
+        signal.pause()
+    except KeyboardInterrupt:
+        pass                    # handled: what follows is not raised from it
+    raise SystemError("a bug of ours")
+
+main._list = command
+sys.argv = ["gnibench", "list", "methods"]
+entry.main()
+"""
+
+
+def test_an_error_of_its_own_after_an_interrupt_is_not_hidden():
+    """Only an error raised while the interrupt propagates is taken for it: a bug stays one."""
+    out = subprocess.run([sys.executable, "-c", AN_ERROR_AFTER_THE_INTERRUPT], check=False,
+                         capture_output=True, text=True, timeout=SAFETY)
+    assert out.returncode == 1 and "SystemError: a bug of ours" in out.stderr, out.stderr[-3000:]
