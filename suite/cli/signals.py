@@ -22,8 +22,9 @@ Late. The watchdog also sleeps on the signal wakeup fd, which the C-level handle
 once: when a signal has not been raised in the main thread ``GRACE`` seconds after it came (a
 long compile, or a long C call holding the main thread), it ends the process with one line and
 the same exit code. Nothing finished is lost: every result file and stored cell is committed by
-an atomic rename (a temporary file may remain, removed by the next run), and pool workers die
-with their parent (:mod:`gnibench.suite.runs.executors`).
+an atomic rename (a temporary file may remain, removed by the next run), pool workers die
+with their parent (:mod:`gnibench.suite.runs.executors`), and a results directory's lock is
+emptied as on a clean end (the next run took the hard exit for a killed run and said so).
 
 Turned into other errors. A C extension's module init that a KeyboardInterrupt interrupts
 returns an error the interpreter reports as ``SystemError: ... returned a result with an
@@ -126,6 +127,9 @@ def quiet() -> None:
 
 
 def _hard_exit(signum: int) -> None:
+    lock = sys.modules.get("gnibench.suite.runs.lock")      # loaded when a run holds one
+    if lock is not None:
+        lock.clear_held()
     with contextlib.suppress(OSError):
         os.write(2, f"gnibench: {NAMES.get(signum, 'interrupted')} (while compiling or in compiled "
                     f"code; what was finished is kept)\n".encode())

@@ -90,3 +90,39 @@ def test_an_error_of_its_own_after_an_interrupt_is_not_hidden():
     out = subprocess.run([sys.executable, "-c", AN_ERROR_AFTER_THE_INTERRUPT], check=False,
                          capture_output=True, text=True, timeout=SAFETY)
     assert out.returncode == 1 and "SystemError: a bug of ours" in out.stderr, out.stderr[-3000:]
+
+
+# A run holds its results directory's lock while the main thread is in numba (here: a frame of a
+# module named numba.*), where a signal is only marked pending: the watchdog ends the process
+# after GRACE (the "hard exit").
+HARD_EXIT_HOLDING_A_LOCK = """
+import sys
+from gnibench.suite.cli import signals
+from gnibench.suite.runs.lock import DirectoryLock
+
+with signals.handling():
+    DirectoryLock(sys.argv[1]).acquire()
+    exec("print('locked', flush=True)\\nwhile True:\\n    pass", {"__name__": "numba.compiling"})
+"""
+
+
+def test_a_hard_exit_empties_the_lock_so_the_next_run_takes_it_silently(tmp_path, capsys):
+    """A Ctrl-C during a cold compile of ``gnibench run -j 1`` ended it at once, as designed,
+    but left ``pid N`` in the lock: the next run warned "left locked by pid N, which is gone
+    (killed?); lock taken over" after an orderly interrupt."""
+    import signal
+
+    from gnibench.suite.runs.lock import DirectoryLock
+
+    proc = subprocess.Popen([sys.executable, "-c", HARD_EXIT_HOLDING_A_LOCK, str(tmp_path)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert proc.stdout.readline().strip() == "locked"
+    proc.send_signal(signal.SIGINT)
+    proc.wait(timeout=SAFETY)
+    err = proc.stderr.read()
+    assert proc.returncode == 130 and "while compiling" in err, err
+    assert (tmp_path / ".lock").read_text() == ""
+    lock = DirectoryLock(tmp_path)
+    lock.acquire()
+    lock.release()
+    assert "warning" not in capsys.readouterr().err
