@@ -77,6 +77,13 @@ class _State:
 _state = _State()
 
 
+def note(signum: int) -> None:
+    """Record a signal received by another handler of ours: the console script's early ones
+    (:mod:`gnibench.suite.cli.entry`), back in place when a command's handling has ended, so that
+    a signal then is still named rightly (a SIGTERM there gave "interrupted", exit code 130)."""
+    _state.received = signum
+
+
 def exit_code(default: int = 130) -> int:
     return 128 + _state.received if _state.received else default
 

@@ -126,3 +126,30 @@ def test_a_hard_exit_empties_the_lock_so_the_next_run_takes_it_silently(tmp_path
     lock.acquire()
     lock.release()
     assert "warning" not in capsys.readouterr().err
+
+
+# The command's handling has ended (its handlers are restored to the console script's early
+# ones) and a SIGTERM comes before the process ends.
+SIGTERM_AS_THE_HANDLING_ENDS = """
+import os, signal, sys
+from gnibench.suite.cli import entry, signals
+
+real = signals.watch_signals
+
+def watch(on):                  # called as handling() ends, its handlers already restored
+    real(on)
+    if not on:
+        os.kill(os.getpid(), signal.SIGTERM)
+
+signals.watch_signals = watch
+sys.argv = ["gnibench", "list", "metrics"]
+entry.main()
+"""
+
+
+def test_a_sigterm_as_the_handling_ends_is_named_terminated_with_exit_143():
+    """Seen: ``kill -TERM`` as ``gnibench verify`` printed its last line gave "gnibench:
+    interrupted" and exit code 130 (the early handler saw it, the message read the command's)."""
+    out = subprocess.run([sys.executable, "-c", SIGTERM_AS_THE_HANDLING_ENDS], check=False,
+                         capture_output=True, text=True, timeout=SAFETY)
+    assert (out.returncode, out.stderr.strip()) == (143, "gnibench: terminated"), out.stderr
