@@ -5,7 +5,8 @@
   checked first, then registered together; nothing is registered when one fails.
 * :func:`discover` loads, once per process, the files of ``GNIBENCH_LOAD`` (paths separated by
   ``:``, empty entries skipped: :func:`load_paths`) and the entry points of the groups
-  ``gnibench.problems`` and ``gnibench.methods``. An entry point names a definition table (a
+  ``gnibench.problems`` and ``gnibench.methods`` (a broken entry point is a warning and is
+  skipped; a bad ``GNIBENCH_LOAD`` file is an error). An entry point names a definition table (a
   dict with the keys of a file's entry; ``id`` defaults to the entry point's name), a list of
   them, or a function returning either.
 
@@ -83,10 +84,23 @@ def discover() -> None:
 
         for group in GROUPS:
             for ep in entry_points(group=group):
-                _load_entry_point(group, ep.name)
+                _load_installed(group, ep.name)
     except BaseException:
         _discovered = False             # the next call tries again (and says so again)
         raise
+
+
+def _load_installed(group: str, name: str) -> None:
+    """An installed entry point, found by :func:`discover`: a broken one (it fails to import,
+    raises, gives the wrong type, a bad or colliding id) is one warning line naming it and what
+    is allowed, and its definitions are skipped; the shipped ones and those of the other
+    packages stay usable (a broken plugin made every solve, list and run exit with code 2)."""
+    from gnibench.suite.foundation.cache import warn
+
+    try:
+        _load_entry_point(group, name)
+    except UserError as e:
+        warn(f"{e}; its definitions are skipped (fix or uninstall its package)")
 
 
 def _short(value) -> str:
