@@ -153,3 +153,29 @@ def test_a_sigterm_as_the_handling_ends_is_named_terminated_with_exit_143():
     out = subprocess.run([sys.executable, "-c", SIGTERM_AS_THE_HANDLING_ENDS], check=False,
                          capture_output=True, text=True, timeout=SAFETY)
     assert (out.returncode, out.stderr.strip()) == (143, "gnibench: terminated"), out.stderr
+
+
+def test_an_interrupt_after_every_cell_was_stored_says_to_finish(tmp_path, monkeypatch):
+    """The line of an interrupt while the last tables were written said "run the same command
+    again to compute the rest" with every cell stored."""
+    import io
+
+    from gnibench.suite.runs import runner
+
+    exp = tmp_path / "two.toml"
+    exp.write_text('name = "two"\ntitle = "Two cells"\nreference = "[HLW] (2.2)"\nsteps = 10\n'
+                   '[[cells]]\nproblems = ["kepler-2d"]\nmethods = ["rk4"]\nvary.h = [0.1, 0.2]\n')
+    real, raised = runner.Consolidator.flush, []
+
+    def flush(self, done):
+        if len(done) == 2 and not raised:         # a write with both cells stored: a Ctrl-C
+            raised.append(True)
+            raise KeyboardInterrupt
+        return real(self, done)
+
+    monkeypatch.setattr(runner.Consolidator, "flush", flush)
+    log = io.StringIO()
+    with pytest.raises(KeyboardInterrupt):
+        runner.run_experiment(str(exp), tmp_path / "out", jobs=1, log=log)
+    assert "2 of 2 cells are stored" in log.getvalue()
+    assert "run the same command again to finish" in log.getvalue(), log.getvalue()
