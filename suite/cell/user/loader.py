@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import time
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
@@ -55,6 +56,12 @@ class Origin:
 
 #: origin name -> (digest of its text, [(kind, id)])
 _LOADED: dict[str, tuple[str, list[tuple[str, str]]]] = {}
+#: per loaded file, its stat and digest when its text was last found unchanged (refresh)
+_CHECKED: dict[str, tuple] = {}
+#: a file modified less than this long ago (ns) is read again even when its stat is unchanged:
+#: two writes within one tick of the file system's clock, of the same size, have the same stat
+#: (git's "racy" entries)
+RACY_NS = 2_000_000_000
 _discovered = False
 
 
@@ -141,10 +148,21 @@ def refresh() -> None:
     ``solve`` and ``run``: a notebook sees its edited definitions, as a new command would)."""
     for name in [n for n, (digest, _) in _LOADED.items() if digest]:
         try:
-            text = Path(name).read_text(encoding="utf-8")
-        except (OSError, UnicodeDecodeError):
-            continue                                 # gone or unreadable: keep what was loaded
-        if hashlib.sha256(text.encode()).hexdigest() != _LOADED[name][0] or _stale(name):
+            st = os.stat(name)
+        except OSError:
+            continue                                 # gone: keep what was loaded
+        seen = (st.st_mtime_ns, st.st_ctime_ns, st.st_size, st.st_ino, _LOADED[name][0])
+        if _CHECKED.get(name) != seen:               # the file may have changed: read it
+            try:
+                text = Path(name).read_text(encoding="utf-8")
+            except (OSError, UnicodeDecodeError):
+                continue                             # unreadable: keep what was loaded
+            if hashlib.sha256(text.encode()).hexdigest() != _LOADED[name][0]:
+                load(name)
+                continue
+            if time.time_ns() - st.st_mtime_ns > RACY_NS:   # an older stat can be trusted
+                _CHECKED[name] = seen
+        if _stale(name):
             load(name)
 
 
