@@ -81,7 +81,10 @@ def solve_output(cell, progress=None, spool=None) -> SolveOutput:
     from gnibench.suite.runs.streaming import stream_output, streamable
 
     if spool is not None and streamable(cell):
-        return stream_output(cell, spool, progress)
+        traj, interrupted, table = stream_output(cell, spool, progress)
+        if table is None:                     # no row: the empty table
+            return whole_output(cell, traj, interrupted)
+        return SolveOutput(traj, *table, interrupted, cell)
     interrupted = None
     try:
         traj = integrate(cell, progress=progress)

@@ -63,11 +63,12 @@ def streamable(cell) -> bool:
 
 
 def stream_output(cell, directory: Path, progress=None):
-    """:func:`gnibench.suite.runs.solving.solve_output` for a :func:`streamable` cell, with the
-    table's columns spooled under ``directory`` (:class:`~gnibench.suite.runs.spool.
-    SpooledColumn`): the same columns, metadata, status and Ctrl-C handling."""
+    """What :func:`gnibench.suite.runs.solving.solve_output` makes of a :func:`streamable` cell,
+    with the table's columns spooled under ``directory`` (:class:`~gnibench.suite.runs.spool.
+    SpooledColumn`): ``(trajectory, Ctrl-C or None, table)``, the trajectory holding the last
+    row and the table ``(metric outputs, skipped, columns, metadata)``, or None when there is no
+    row (the whole, empty, table is made from the trajectory)."""
     from gnibench.suite.cell.driver import Interrupted, integrate
-    from gnibench.suite.runs.solving import SolveOutput, whole_output
     from gnibench.suite.runs.spool import ColumnSpool, RawSpool
     from gnibench.suite.runs.storage import provenance
 
@@ -80,7 +81,7 @@ def stream_output(cell, directory: Path, progress=None):
     finally:
         raw.close()
     if not raw.width:                         # no row at all: the whole (empty) table
-        return whole_output(cell, summary, interrupted)
+        return summary, interrupted, None
     reference = cell.reference if interrupted is None else None   # as integrate() attaches it
     plan = _sweeps(cell, raw) if reference is not None else None
     table, folded, skipped, described = ColumnSpool(directory), {}, {}, None
@@ -101,8 +102,7 @@ def stream_output(cell, directory: Path, progress=None):
     from gnibench.suite.metrics.base import MetricOutput
 
     metrics = MetricOutput(scalars={k: float(v) for k, v in folded.items()})
-    return SolveOutput(summary, metrics, skipped, table.columns(), provenance(summary, metrics),
-                       interrupted, cell)
+    return summary, interrupted, (metrics, skipped, table.columns(), provenance(summary, metrics))
 
 
 def _block(cell, summary, t, y, c):
