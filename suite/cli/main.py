@@ -208,7 +208,7 @@ def _solve(a) -> int:
                            dt_out=a.dt_out, section=a.section, reference=a.reference,
                            metrics=() if a.metrics is None else a.metrics)
     progress = SolveProgress(f"{a.problem} {a.method}")
-    with spool_directory() as spool:     # the table made and written block by block
+    with spool_directory(cell) as spool:     # the table made and written block by block
         try:
             out = solve_output(cell, progress=progress, spool=spool)
         finally:

@@ -25,6 +25,8 @@ the chosen metrics not in :data:`FOLDS`. The Python API keeps the whole table (i
 from __future__ import annotations
 
 import contextlib
+import os
+import shutil
 import tempfile
 from pathlib import Path
 
@@ -35,6 +37,9 @@ import numpy as np
 #: buffers, and the grid steps redone at their ends, ``time_grid.steps_redone``)
 BLOCK = 1 << 16
 
+#: the start of the name of a spool directory, followed by the process id
+SPOOL_PREFIX = "gnibench-solve-"
+
 #: how each per-cell value of a streamed metric follows from its values on the blocks, by the
 #: start of its name: the largest (NaN propagates, as np.max over the whole series), the first
 #: block's (a constant), the last block's (the final sample)
@@ -44,10 +49,27 @@ FOLDS = {"invariant_error": {"max_abs_err_": "max", "scale_": "first"},
 
 
 @contextlib.contextmanager
-def spool_directory():
-    """A temporary directory for the spooled rows and columns (``TMPDIR``), removed on exit."""
-    with tempfile.TemporaryDirectory(prefix="gnibench-solve-") as d:
+def spool_directory(cell=None):
+    """A temporary directory for the spooled rows and columns (``TMPDIR``), removed on exit;
+    None for a ``cell`` that is not :func:`streamable` (its table is made in memory)."""
+    if cell is not None and not streamable(cell):
+        yield None
+        return
+    _remove_orphans()
+    with tempfile.TemporaryDirectory(prefix=f"{SPOOL_PREFIX}{os.getpid()}-") as d:
         yield Path(d)
+
+
+def _remove_orphans() -> None:
+    """Remove the spool directories of solves that were killed (SIGKILL leaves them): those whose
+    process (the number in the name) no longer exists."""
+    for d in Path(tempfile.gettempdir()).glob(f"{SPOOL_PREFIX}*-*"):
+        try:
+            os.kill(int(d.name[len(SPOOL_PREFIX):].split("-")[0]), 0)
+        except ProcessLookupError:
+            shutil.rmtree(d, ignore_errors=True)
+        except (ValueError, OSError):       # not ours, or a process of another user
+            continue
 
 
 def streamable(cell) -> bool:

@@ -147,3 +147,21 @@ def test_cells_that_need_the_whole_series_keep_the_whole_table(problem, method, 
     out = solve_output(cell, spool=tmp_path)
     assert all(isinstance(c, np.ndarray) for c in out.columns.values())
     assert not list(tmp_path.iterdir())
+
+
+def test_the_spool_of_a_killed_solve_is_removed_by_the_next(tmp_path, monkeypatch):
+    import subprocess
+    import sys
+
+    monkeypatch.setenv("TMPDIR", str(tmp_path))
+    monkeypatch.setattr(streaming.tempfile, "tempdir", None)     # TMPDIR read again
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True).stdout.strip()
+    orphan = tmp_path / f"{streaming.SPOOL_PREFIX}{dead}-x"
+    alive = tmp_path / f"{streaming.SPOOL_PREFIX}{__import__('os').getpid()}-y"
+    orphan.mkdir()
+    alive.mkdir()
+    cell = solve_cell_spec("kepler-2d", "rk4:h=0.01", steps=20)
+    with streaming.spool_directory(cell) as d:
+        assert d.parent == tmp_path and d.name.startswith(streaming.SPOOL_PREFIX)
+    assert not orphan.exists() and alive.exists() and not d.exists()
