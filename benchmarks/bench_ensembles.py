@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import resource
 import sys
 import tempfile
@@ -120,6 +121,7 @@ def main(argv=None) -> int:
     a.add_argument("--quick", action="store_true", help="40 orbits to t = 10, once (CI)")
     a.add_argument("--json", type=Path)
     args = a.parse_args(argv)
+    load = os.getloadavg()[0]
     if args.quick:
         args.orbits, args.t_end, args.repeats = 40, 10.0, 1
     from gnibench.suite.api.running import toml_text
@@ -192,7 +194,17 @@ def main(argv=None) -> int:
               f"{ratio} | {r['median_error_ensemble']:.2e}, "
               f"{r['median_error_heyoka'] or float('nan'):.2e} | {r['same_bits']} |")
     if args.json:
-        args.json.write_text(json.dumps(rows, indent=1) + "\n")
+        from gnibench.suite.foundation.benchmarks import script_result
+
+        for r in rows:
+            ens = r[f"{r['best_ensemble']}_s"]
+            r["cells_over_ensemble"] = r["cells_s"] / ens
+            r["ensemble_over_heyoka"] = None if r["heyoka_s"] is None else ens / r["heyoka_s"]
+        goals = {"cells_over_ensemble": [">=", 20, "1,000 separate cells / the ensemble (wall)"],
+                 "ensemble_over_heyoka": ["<=", 1.5, "the ensemble / heyoka's "
+                                          "ensemble_propagate_until at the same accuracy (wall)"]}
+        args.json.write_text(json.dumps(script_result("bench_ensembles.py", rows, goals, load),
+                                        indent=1) + "\n")
     return 0 if all(r["same_bits"] for r in rows) else 1
 
 

@@ -12,6 +12,7 @@ mpmath), more than the integrators it is meant to judge; in long double it is wi
 from __future__ import annotations
 
 import numpy as np
+from gnibench.problems.blockwise import sweeps
 
 LD = np.longdouble
 PI = LD("3.14159265358979323846264338327950288")
@@ -29,15 +30,18 @@ def solve_kepler(M: np.ndarray, e) -> np.ndarray:
 
 
 def _newton(Mr: np.ndarray, e, E: np.ndarray) -> np.ndarray:
-    """Newton's iteration on E - e sin E = Mr from E (Danby's start), to round-off in double."""
+    """Newton's iteration on E - e sin E = Mr from E (Danby's start), to round-off in double: the
+    array's sweeps until all its elements converged (evaluated by blocks as in one array:
+    :mod:`gnibench.problems.blockwise`)."""
     eps = np.finfo(Mr.dtype).eps
-    for _ in range(60):
+
+    def sweep(E):
         f = E - e * np.sin(E) - Mr
         dE = f / (1 - e * np.cos(E))
         E = E - dE
-        if np.all(np.abs(dE) <= 2 * eps * (1 + np.abs(E))):
-            break
-    return E
+        return E, np.all(np.abs(dE) <= 2 * eps * (1 + np.abs(E)))
+
+    return sweeps(sweep, E, 60)
 
 
 def kepler_anomaly(M: np.ndarray, e) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -43,7 +43,7 @@ def budget_reason(status: Status, buffers: Buffers, t: float) -> str:
         return ""
     from gnibench.suite.foundation.budgets import limit
 
-    rows = buffers.before + buffers.row
+    rows = buffers.rows
     return (f"the output budget is full at t = {t:.17g} after {rows} rows (at most {buffers.cap} "
             f"rows of {buffers.dim} states: GNIBENCH_MAX_ROWS={limit('GNIBENCH_MAX_ROWS')}, "
             f"GNIBENCH_MAX_OUTPUT_MB={limit('GNIBENCH_MAX_OUTPUT_MB')}); sample less often "
@@ -51,13 +51,22 @@ def budget_reason(status: Status, buffers: Buffers, t: float) -> str:
 
 
 class Buffers:
-    """Output buffers of a compiled driver: the rows written so far, and views with room left."""
+    """Output buffers of a compiled driver: the rows written so far, and views with room left.
 
-    def __init__(self, rows: int, dim: int, grow: bool):
-        self.dim, self.grow, self.chunks = dim, grow, []
-        self.before = 0                 # rows in the chunks already full
+    With a ``sink`` (``sink(t, y, c)``, and ``sink.rows``: the rows of one block), a full buffer is
+    handed to the sink and reused, so that memory does not grow with the rows (``gnibench solve``
+    writing a file, :mod:`gnibench.suite.runs.streaming`); :meth:`arrays` then hands over the
+    rows left and returns the last row only. The row budget (:func:`row_budget`) counts every row
+    either way."""
+
+    def __init__(self, rows: int, dim: int, grow: bool, sink=None):
+        self.dim, self.grow, self.chunks, self.sink = dim, grow, [], sink
+        self.before = 0                 # rows in the chunks already full (or handed to the sink)
         self.cap = row_budget(dim)
-        self._new(max(min(int(rows), self.cap) if grow else int(rows), 2))
+        rows = max(min(int(rows), self.cap) if grow else int(rows), 2)
+        if not grow:                    # sized for the horizon, checked before the run
+            self.cap = max(self.cap, rows)
+        self._new(rows if sink is None else max(min(rows, sink.rows, self.cap), 2))
 
     def _new(self, rows: int) -> None:
         self.t, self.y = np.empty(rows), np.empty((rows, self.dim))
@@ -78,11 +87,17 @@ class Buffers:
         buffer, once the rows would pass :func:`row_budget` (a K-S run whose physical time ran
         away asked for 10^7 rows in one step and the next buffer doubled until the OOM killer
         ended the worker)."""
-        if not self.grow:
+        if not self.grow and self.sink is None:
             raise RuntimeError("compiled driver: output buffer too small (sized for the horizon)")
         size = min(len(self.t) if self.row else 2 * len(self.t), self.cap - self.before - self.row)
         if size <= 0 or (not self.row and size <= len(self.t)):
             return False                # no room left, or one step needs more than is left
+        if self.sink is not None:
+            self._hand_over()
+            if size != len(self.t):     # a step's rows that did not fit, or the budget's last
+                self.chunks.pop()
+                self._new(size)
+            return True
         self.before += self.row
         if not self.row:                # nothing written: this buffer is replaced, not kept
             self.chunks.pop()
@@ -94,12 +109,28 @@ class Buffers:
         self._new(size)
         return True
 
+    def _hand_over(self) -> None:
+        """The rows written so far to the sink; the buffer is free again."""
+        r = self.row
+        self.before, self.row = self.before + r, 0      # counted first: a Ctrl-C in the sink
+        if r:                                           # must not hand them over twice
+            self.last = self.t[r - 1:r].copy(), self.y[r - 1:r].copy(), self.c[r - 1:r].copy()
+            self.sink(self.t[:r], self.y[:r], self.c[:r])
+
     def arrays(self):
+        if self.sink is not None:       # the rows left to the sink; the last row is kept
+            self._hand_over()
+            return getattr(self, "last", (self.t[:0], self.y[:0], self.c[:0]))
         parts = self.chunks[:-1] + [self]
         t = np.concatenate([p.t[:p.row] if p is self else p.t for p in parts])
         y = np.concatenate([p.y[:p.row] if p is self else p.y for p in parts])
         c = np.concatenate([p.c[:p.row] if p is self else p.c for p in parts])
         return t, y, c
+
+    @property
+    def rows(self) -> int:
+        """The rows written in all (handed to the sink or kept)."""
+        return self.before + self.row
 
 
 def run_driver(call: Callable, buffers: Buffers, fraction: Callable[[], float],

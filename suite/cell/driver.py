@@ -35,7 +35,7 @@ from gnibench.suite.foundation.params import Bound
 from gnibench.suite.foundation.provenance import versions
 from gnibench.suite.foundation.status import Status
 
-__all__ = ["UNLIMITED", "Interrupted", "attach_reference", "integrate"]
+__all__ = ["STREAMED", "UNLIMITED", "Interrupted", "attach_reference", "integrate"]
 
 ADAPTIVE_CHUNK = 4096       # rows of one output buffer of an adaptive driver
 GRID_ROWS = 10**7           # at most this many rows in one buffer of a time grid
@@ -50,7 +50,7 @@ class Interrupted(KeyboardInterrupt):
 
 
 def integrate(cell: CellSpec, *, progress: Progress | None = None,
-              budget: int | None = 0) -> Trajectory:
+              budget: int | None = 0, sink=None) -> Trajectory:
     """Integrate one typed cell (:func:`gnibench.suite.cell.cellspec.build`: validated there,
     nothing is checked again here); divergence is a status, Ctrl-C raises :class:`Interrupted`
     with the samples so far.
@@ -69,28 +69,36 @@ def integrate(cell: CellSpec, *, progress: Progress | None = None,
     budget:
         Steps per call of a compiled driver: 0 tunes it to ``CALL_SECONDS`` a call, None does
         the whole horizon in one call (the benchmark loop).
+    sink:
+        For the kinds of :data:`STREAMED`: each block of the driver's raw output rows (t, y and
+        the counters of the integrated system: the transformed one for K-S) is handed to
+        ``sink(t, y, c)`` and the buffer reused (:class:`.calls.Buffers`); the trajectory
+        returned holds the last row only and no reference
+        (:mod:`gnibench.suite.runs.streaming` makes the table from the blocks).
     """
-    traj = _BRANCHES[cell.kind](cell, progress, budget)
+    if sink is not None and cell.kind not in STREAMED:
+        raise ValueError(f"a {cell.kind} cell is not streamed")
+    traj = _BRANCHES[cell.kind](cell, progress, budget, sink)
     if traj.status is Status.INTERRUPTED:
         traj.reason = f"interrupted by the user at t = {traj.t[-1]:.17g}" if len(traj.t) else \
             "interrupted by the user"
         raise Interrupted(traj)
-    if cell.reference is not None:
+    if cell.reference is not None and sink is None:
         attach_reference(traj, cell.problem, cell.reference)
     return traj
 
 
-def _section(cell: CellSpec, progress, budget) -> Trajectory:
+def _section(cell: CellSpec, progress, budget, sink=None) -> Trajectory:
     """Section crossings: located inside the compiled drivers, or scanned from the samples of an
     engine or a transformed problem taken at every step."""
     samples = None
     if cell.method_kind != "compiled" or cell.transformed is not None:
         inner = cell.samples_cell()
-        samples = _BRANCHES[inner.kind](inner, progress, budget)
+        samples = _BRANCHES[inner.kind](inner, progress, budget, None)
     return integrate_section(cell, progress=progress, samples=samples, budget=budget)
 
 
-def _engine(cell: CellSpec, progress, budget) -> Trajectory:
+def _engine(cell: CellSpec, progress, budget, sink=None) -> Trajectory:
     """An external engine's cell (or a user's Python integrator): ``Method.run`` on the sample
     grid instead of a compiled driver."""
     problem, method = cell.problem, cell.method
@@ -112,17 +120,17 @@ def _engine(cell: CellSpec, progress, budget) -> Trajectory:
                             prov)
 
 
-def _compiled_cell(cell: CellSpec, progress, budget) -> Trajectory:
+def _compiled_cell(cell: CellSpec, progress, budget, sink=None) -> Trajectory:
     """A compiled fixed-step or adaptive cell on the problem itself."""
-    return _compiled(cell.problem, cell, progress, budget)
+    return _compiled(cell.problem, cell, progress, budget, sink)
 
 
-def _transformed(cell: CellSpec, progress, budget) -> Trajectory:
+def _transformed(cell: CellSpec, progress, budget, sink=None) -> Trajectory:
     """Integrate the transformed problem (e.g. K-S), then map its samples back to (t, y); a time
     grid is in the original time, the transformed system's state component ``Transform.time``."""
     problem, transformed = cell.problem, cell.transformed
     tr = problem.record.transform
-    inner = _compiled(transformed, cell, progress, budget)
+    inner = _compiled(transformed, cell, progress, budget, sink)
     t, y = tr.back(inner.y, problem.values)
     pk = problem_kernel(problem)
     y0 = tuple(problem.record.y0(problem.values))
@@ -133,7 +141,7 @@ def _transformed(cell: CellSpec, progress, budget) -> Trajectory:
     return build_trajectory(problem, cell.method, t, y, counters, inner.status, inner.reason, prov)
 
 
-def _compiled(problem: Bound, cell: CellSpec, progress, budget) -> Trajectory:
+def _compiled(problem: Bound, cell: CellSpec, progress, budget, sink=None) -> Trajectory:
     """A compiled cell on ``problem`` (the cell's, or its transformed system): the fixed-step
     driver or the adaptive one, sampled every K steps or on the cell's time grid
     (:attr:`~gnibench.suite.cell.cellspec.CellSpec.grid_plan`; in a state component of a
@@ -158,12 +166,15 @@ def _compiled(problem: Bound, cell: CellSpec, progress, budget) -> Trajectory:
         rows = ADAPTIVE_CHUNK
     else:
         rows = cell.rows + 1
-    buffers = Buffers(rows, problem.record.dim, grow=adaptive or gp is not None)
+    buffers = Buffers(rows, problem.record.dim, grow=adaptive or gp is not None, sink=sink)
     status, wall = drv.run(buffers, progress, budget)
     meta = drv.meta()
     if gp is not None:
         time_name = "t" if gp.tcomp < 0 else problem.record.state[gp.tcomp]
-        meta["time_grid"] = gp.describe(every, time_name, drv.slot("ST_ROLLBACKS"))
+        redone = drv.slot("ST_ROLLBACKS")
+        if sink is not None and gp.tcomp < 0 and buffers.rows + 2 <= rows:
+            redone = 0.0    # redone only at hand-overs to the sink: the one buffer had room
+        meta["time_grid"] = gp.describe(every, time_name, redone)
         if gp.locator == "dense output":
             pair = method.base.record.data
             dense = pair.dense
@@ -177,6 +188,8 @@ def _compiled(problem: Bound, cell: CellSpec, progress, budget) -> Trajectory:
     return drv.trajectory(buffers, status, reason, meta, wall)
 
 
+#: the kinds of cell whose output rows :func:`integrate` can hand to a sink block by block
+STREAMED = frozenset({CellKind.FIXED, CellKind.ADAPTIVE, CellKind.TRANSFORMED})
 #: the branch of :func:`integrate` for each kind of cell
 _BRANCHES = {CellKind.FIXED: _compiled_cell, CellKind.ADAPTIVE: _compiled_cell,
              CellKind.ENGINE: _engine, CellKind.TRANSFORMED: _transformed,

@@ -57,10 +57,13 @@ def _values(problem: Bound, options, points, i: int) -> dict:
 
 def _key(problem: Bound, y0: np.ndarray, grid: np.ndarray, spec) -> str:
     from gnibench.problems.codegen import _source_hash
+    from gnibench.suite.foundation.provenance import code_digest
 
+    code = code_digest("gnibench.methods.engines.base", "gnibench.methods.engines.heyoka", __name__)
     h = hashlib.sha256(json.dumps({
         "format": FORMAT, "problem": problem.text(), "source": _source_hash(problem.record),
-        "spec": spec.text(), "engine": f"heyoka {version('heyoka')}"}, sort_keys=True).encode())
+        "spec": spec.text(), "engine": f"heyoka {version('heyoka')}", "engine_code": code},
+        sort_keys=True).encode())
     h.update(np.ascontiguousarray(y0, dtype="<f8").tobytes())
     h.update(np.ascontiguousarray(grid, dtype="<f8").tobytes())
     return h.hexdigest()[:24]

@@ -142,13 +142,16 @@ def default_reference(problem) -> ReferenceSpec | None:
 
 def _key(problem_bound, t: np.ndarray, spec: ReferenceSpec) -> str:
     from gnibench.problems.codegen import _source_hash
+    from gnibench.suite.foundation.provenance import code_digest
 
     engine = {"heyoka": "heyoka", "rebound": "rebound"}[spec.backend]
     doc = {"format": FORMAT, "problem": problem_bound.text(),
            "source": _source_hash(problem_bound.record),
            "grid": hashlib.sha256(np.ascontiguousarray(t, dtype=np.float64).tobytes()).hexdigest(),
            "backend": spec.backend, "precision": spec.precision, "tol": repr(spec.tol),
-           "engine": f"{engine} {version(engine)}"}
+           "engine": f"{engine} {version(engine)}",
+           "engine_code": code_digest("gnibench.methods.engines.base",
+                                      f"gnibench.methods.engines.{engine}")}
     return hashlib.sha256(json.dumps(doc, sort_keys=True).encode()).hexdigest()[:24]
 
 

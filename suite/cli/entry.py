@@ -14,7 +14,7 @@ import os
 import signal
 import sys
 
-from gnibench.suite.foundation.guard import signal_received
+from gnibench.suite.foundation.guard import from_interrupt, signal_received
 
 _received: list[int] = []
 
@@ -22,6 +22,9 @@ _received: list[int] = []
 def _early(signum, frame):
     _received.append(signum)
     signal_received()
+    signals = sys.modules.get("gnibench.suite.cli.signals")   # loaded: the command's handling
+    if signals is not None:                                   # ended, and its end reports this
+        signals.note(signum)
     raise KeyboardInterrupt
 
 
@@ -62,7 +65,12 @@ def _last_signal() -> int:
 
 def main() -> int:
     try:
-        from gnibench.suite.cli.main import main as command
+        try:
+            from gnibench.suite.cli.main import main as command
+        except Exception as e:           # a C extension's init made the interrupt another error
+            if _received and from_interrupt(e):     # (signals.py, "Turned into other errors")
+                raise KeyboardInterrupt from None
+            raise
     except KeyboardInterrupt:
         signum = _received[-1] if _received else signal.SIGINT
         print("gnibench: " + ("terminated" if signum == signal.SIGTERM else "interrupted"),

@@ -192,6 +192,7 @@ def _solve(a) -> int:
     from gnibench.suite.cli import streams
     from gnibench.suite.runs.progress import SolveProgress
     from gnibench.suite.runs.solving import solve_cell_spec, solve_output
+    from gnibench.suite.runs.streaming import spool_directory
     from gnibench.suite.runs.writers import write_columns
 
     if a.output is not None and str(a.output) in ("-", "/dev/stdout"):
@@ -207,15 +208,16 @@ def _solve(a) -> int:
                            dt_out=a.dt_out, section=a.section, reference=a.reference,
                            metrics=() if a.metrics is None else a.metrics)
     progress = SolveProgress(f"{a.problem} {a.method}")
-    try:
-        out = solve_output(cell, progress=progress)
-    finally:
-        progress.close()
-    try:
-        write_columns(out.columns, out.meta, a.format, a.output, sys.stdout)
-    except OSError as e:                  # e.g. the disk filled up: nothing is left half-written
-        raise fault(e, f"writing {a.output or 'stdout'}", "run the same command again once "
-                    "there is room") from None
+    with spool_directory(cell) as spool:     # the table made and written block by block
+        try:
+            out = solve_output(cell, progress=progress, spool=spool)
+        finally:
+            progress.close()
+        try:
+            write_columns(out.columns, out.meta, a.format, a.output, sys.stdout)
+        except OSError as e:              # e.g. the disk filled up: nothing is left half-written
+            raise fault(e, f"writing {a.output or 'stdout'}", "run the same command again once "
+                        "there is room") from None
     if out.interrupted is not None:       # the samples so far are written, then exit 130
         raise out.interrupted
     for name, why in out.skipped.items():

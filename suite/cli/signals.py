@@ -22,8 +22,16 @@ Late. The watchdog also sleeps on the signal wakeup fd, which the C-level handle
 once: when a signal has not been raised in the main thread ``GRACE`` seconds after it came (a
 long compile, or a long C call holding the main thread), it ends the process with one line and
 the same exit code. Nothing finished is lost: every result file and stored cell is committed by
-an atomic rename (a temporary file may remain, removed by the next run), and pool workers die
-with their parent (:mod:`gnibench.suite.runs.executors`).
+an atomic rename (a temporary file may remain, removed by the next run), pool workers die
+with their parent (:mod:`gnibench.suite.runs.executors`), and a results directory's lock is
+emptied as on a clean end (the next run took the hard exit for a killed run and said so).
+
+Turned into other errors. A C extension's module init that a KeyboardInterrupt interrupts
+returns an error the interpreter reports as ``SystemError: ... returned a result with an
+exception set`` (seen when a signal came while pandas was first imported, to write a run's
+tables: a traceback and exit code 1). An exception that ends the command with a KeyboardInterrupt
+in its chain after a signal came is that signal (:func:`handling`; the console script does the
+same during its imports).
 
 Forks. A forked child inherits the C-level handler and the wakeup fd: a signal that reaches it
 before its after-fork hook has reset them is written into the parent's pipe, and the parent's
@@ -44,7 +52,7 @@ import sys
 import threading
 import time
 
-from gnibench.suite.foundation.guard import signal_received, watch_signals
+from gnibench.suite.foundation.guard import from_interrupt, signal_received, watch_signals
 
 GRACE = 1.0                 # seconds the main thread has to raise a signal before a hard exit
 POLL = 0.02                 # how often the watchdog looks while a signal is pending
@@ -67,6 +75,13 @@ class _State:
 
 
 _state = _State()
+
+
+def note(signum: int) -> None:
+    """Record a signal received by another handler of ours: the console script's early ones
+    (:mod:`gnibench.suite.cli.entry`), back in place when a command's handling has ended, so that
+    a signal then is still named rightly (a SIGTERM there gave "interrupted", exit code 130)."""
+    _state.received = signum
 
 
 def exit_code(default: int = 130) -> int:
@@ -119,6 +134,9 @@ def quiet() -> None:
 
 
 def _hard_exit(signum: int) -> None:
+    lock = sys.modules.get("gnibench.suite.runs.lock")      # loaded when a run holds one
+    if lock is not None:
+        lock.clear_held()
     with contextlib.suppress(OSError):
         os.write(2, f"gnibench: {NAMES.get(signum, 'interrupted')} (while compiling or in compiled "
                     f"code; what was finished is kept)\n".encode())
@@ -237,6 +255,10 @@ def handling():
     watcher.start()
     try:
         yield
+    except Exception as e:
+        if _state.received and from_interrupt(e):     # see "Turned into other errors"
+            raise KeyboardInterrupt from None
+        raise
     finally:
         with _state.lock:
             _state.active = False

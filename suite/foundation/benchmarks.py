@@ -119,3 +119,19 @@ def compare(current: dict[str, float], previous: dict[str, tuple[float, str]],
         rows.append({"name": name, "previous": before, "current": value, "ratio": ratio,
                      "run": run, "slower": ratio > threshold})
     return rows
+
+
+def script_result(script: str, rows: list[dict], goals: dict | None = None,
+                  load_before: float | None = None) -> dict:
+    """The JSON document a benchmark script of ``benchmarks/`` writes with ``--json``: its rows
+    (one dict per measured case), the goals they are read against (``{key: [op, value, what]}``)
+    and where, when and under which load it was measured (the documentation's performance page
+    shows the newest saved one of each script from ``benchmarks/results/``)."""
+    import os
+
+    return {"script": script, "date": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+            "commit": commit_info(Path(__file__).resolve().parents[2]),
+            "machine": {"id": machine_id(), "node": platform.node(), "cpus": os.cpu_count(),
+                        "processor": platform.processor() or platform.machine()},
+            "load": {"before": load_before, "after": os.getloadavg()[0]},
+            "goals": goals or {}, "rows": rows}

@@ -45,6 +45,20 @@ def watch_signals(on: bool = True) -> None:
     _watched[0] = on
 
 
+def from_interrupt(e: BaseException) -> bool:
+    """Was ``e`` raised while a KeyboardInterrupt propagated (one in its causes or contexts)?"""
+    todo, seen = [e], set()
+    while todo:
+        x = todo.pop()
+        if x is None or id(x) in seen:
+            continue
+        if isinstance(x, KeyboardInterrupt):
+            return True
+        seen.add(id(x))
+        todo += [x.__cause__, x.__context__]
+    return False
+
+
 def _describe(e: BaseException) -> str:
     if isinstance(e, SystemExit):
         return f"SystemExit({e.code!r}) (the code called sys.exit)"

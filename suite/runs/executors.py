@@ -17,12 +17,17 @@ first, the costliest first (:func:`gnibench.suite.runs.runner._groups`).
   progress of long cells through a queue.
 * ``dask`` (``--executor dask``): a ``distributed.LocalCluster`` of N single-threaded worker
   processes, or the scheduler at ``--scheduler ADDRESS``; the workers must have gnibench installed.
+  A worker that dies mid-cell is Dask's to replace: the cell runs again elsewhere. A cell whose
+  workers all died (Dask's ``KilledWorker``: out of memory, say), a lost scheduler, or a cluster
+  without any worker for ``NO_WORKERS`` seconds (one line when it is first seen empty) ends the
+  run with one line; the cells finished so far are stored, and the same command resumes.
 """
 from __future__ import annotations
 
 import contextlib
 import os
 import signal
+import time
 from collections.abc import Callable, Iterator
 
 from gnibench.suite.foundation.errors import UserError, named, spelled
@@ -33,6 +38,8 @@ from gnibench.suite.runs.pool import default_jobs, workers  # noqa: F401 - part 
 EXECUTORS = ("local", "dask")
 
 Progress = Callable[[int, float], None]
+NO_WORKERS = 60.0       # seconds a Dask cluster may have no worker before the run stops
+POLL = 5.0              # how often a waiting Dask run looks at the cluster's workers
 
 
 def check(executor: str, jobs: int | None, scheduler: str | None) -> None:
@@ -134,7 +141,7 @@ def _quiet_logger(name: str):
 
 
 def _dask(groups, jobs, scheduler, warm=None) -> Iterator[CellOutcome]:
-    from distributed import Client, LocalCluster, as_completed
+    from distributed import Client, LocalCluster
 
     cluster = None
     if scheduler is None:
@@ -168,33 +175,102 @@ def _dask(groups, jobs, scheduler, warm=None) -> Iterator[CellOutcome]:
         except Exception as e:  # noqa: BLE001 - it answered the probe, then went away
             raise UserError(f"bad {named('--scheduler', repr(scheduler))}: cannot connect "
                             f"({type(e).__name__}: {e})") from None
-    try:
-        waiting, cells = {}, {}        # pure=False: fresh keys, never a result of another run
-        for g, ready in zip(groups, warm or [False] * len(groups)):
-            for cell in g if ready else g[:1]:         # a kernel to compile: its first cell alone
-                fut = client.submit(run_cell, cell, pure=False)
-                waiting[fut], cells[fut.key] = [] if ready else g[1:], cell
-        pending = as_completed(list(waiting))
-        for fut in pending:
-            for cell in waiting.pop(fut, []):
-                new = client.submit(run_cell, cell, pure=False)
-                cells[new.key] = cell
-                pending.add(new)
-            outcome = fut.result()
-            outcome.cell = cells.pop(fut.key)    # the caller's own cell, not the worker's copy
-            yield outcome
-    except BaseException:
-        import logging
+    # a lost scheduler is our one line, not the client's ERROR log with two tracebacks
+    with _quiet_logger("distributed.client"):
+        try:
+            yield from _outcomes(client, groups, scheduler, warm)
+        except BaseException:
+            import logging
 
-        # Ctrl-C: the workers are stopped mid-cell; Dask's warnings about that are no news
-        logging.getLogger("distributed").setLevel(logging.ERROR)
-        if cluster is not None:
-            _kill_workers(cluster)
-        raise
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close(timeout=5)
+            # Ctrl-C: the workers are stopped mid-cell; Dask's warnings about that are no news
+            logging.getLogger("distributed").setLevel(logging.ERROR)
+            if cluster is not None:
+                _kill_workers(cluster)
+            raise
+        finally:
+            client.close()
+            if cluster is not None:
+                cluster.close(timeout=5)
+
+
+def _outcomes(client, groups, scheduler, warm=None) -> Iterator[CellOutcome]:
+    """Submit the first cell of each group, the rest of a group once its first has finished (all
+    at once for a group whose kernel is in the disk cache, ``warm``)."""
+    waiting, cells = {}, {}        # pure=False: fresh keys, never a result of another run
+    for g, ready in zip(groups, warm or [False] * len(groups)):
+        for cell in g if ready else g[:1]:         # a kernel to compile: its first cell alone
+            fut = client.submit(run_cell, cell, pure=False)
+            waiting[fut], cells[fut.key] = [] if ready else g[1:], cell
+    pending = set(waiting)
+    for fut in _finished(client, pending, scheduler or "of the local cluster"):
+        for cell in waiting.pop(fut, []):
+            new = client.submit(run_cell, cell, pure=False)
+            cells[new.key] = cell
+            pending.add(new)
+        cell = cells.pop(fut.key)            # the caller's own cell, not the worker's copy
+        outcome = _result(fut, cell, scheduler)
+        outcome.cell = cell
+        yield outcome
+
+
+def _finished(client, pending: set, where: str) -> Iterator:
+    """The futures of ``pending`` as they finish (the caller may add to it meanwhile). Every
+    ``POLL`` seconds without news the cluster's workers are counted: none for ``NO_WORKERS``
+    seconds is a :class:`Fault` (a scheduler without workers waited for ever, silently)."""
+    from distributed import CancelledError, TimeoutError, wait
+
+    from gnibench.suite.foundation.cache import warn
+
+    empty_since = None
+    while pending:
+        try:
+            done, _ = wait(list(pending), timeout=POLL, return_when="FIRST_COMPLETED")
+        except TimeoutError:
+            if _workers(client, where):
+                empty_since = None
+                continue
+            if empty_since is None:
+                empty_since = time.monotonic()
+                hint = f" (start some: dask worker {where})" if "://" in where else ""
+                warn(f"the Dask scheduler {where} has no workers; waiting up to {NO_WORKERS:g} s "
+                     f"for one{hint}")
+            elif time.monotonic() - empty_since > NO_WORKERS:
+                raise Fault(f"the Dask scheduler {where} has had no workers for {NO_WORKERS:g} s;"
+                            f" the cells finished so far are stored: run the same command again "
+                            f"once it has workers (or use {named('--executor', 'local')})") from None
+            continue
+        except CancelledError:          # the scheduler went away: every future is cancelled
+            raise _lost(where) from None
+        for fut in done:
+            pending.discard(fut)
+            yield fut
+
+
+def _workers(client, where: str) -> int:
+    try:
+        return len(client.nthreads())
+    except OSError:                     # CommClosedError included: the scheduler is gone
+        raise _lost(where) from None
+
+
+def _lost(where: str) -> Fault:
+    return Fault(f"the connection to the Dask scheduler {where} was lost; the cells finished so "
+                 f"far are stored: run the same command again once it is back")
+
+
+def _result(fut, cell, scheduler):
+    """The outcome of a cell's future; Dask's failures as one line naming the cell."""
+    from distributed import CancelledError, KilledWorker
+
+    try:
+        return fut.result()
+    except KilledWorker:
+        raise Fault(f"Dask workers died while running cell {cell.id} ({cell.problem} "
+                    f"{cell.method}), one after another (out of memory? see the workers' logs); "
+                    f"the cells finished so far are stored: run the same command again to "
+                    f"compute the rest") from None
+    except CancelledError:
+        raise _lost(scheduler or "of the local cluster") from None
 
 
 #: What the fork server of our LocalCluster's workers imports once, instead of each worker: Dask,

@@ -167,6 +167,15 @@ class DirectoryLock:
         self.fd = None
 
 
+def clear_held() -> None:
+    """Empty the locks this process holds, as it ends at once (``os._exit`` after a signal that
+    could not be raised, :mod:`gnibench.suite.cli.signals`): an orderly end, which the next run
+    must not take for a killed one. The flocks go with the process."""
+    for fd in list(_held):
+        with contextlib.suppress(OSError):
+            os.ftruncate(fd, 0)
+
+
 def _read(fd: int) -> str:
     try:
         return os.pread(fd, 200, 0).decode(errors="replace")

@@ -182,8 +182,9 @@ def run_experiments(experiments: list[Experiment], outs: list[Path], store_root:
             with contextlib.suppress(OSError):
                 for w in writers:
                     w.flush(done)
+            rest = "to compute the rest" if len(done) < len(unique) else "to finish"
             print(f"gnibench: interrupted: {len(done)} of {len(unique)} cells are stored in "
-                  f"{store_root}; {again} to compute the rest", file=log, flush=True)
+                  f"{store_root}; {again} {rest}", file=log, flush=True)
             raise
         except Fault:                 # a worker died: what is stored stays, the rest pending
             progress.close()

@@ -69,19 +69,36 @@ def solve_cell_spec(problem, method, *, steps: int | None = None, t_end: float |
                      section=section, reference=reference, metrics=metrics)
 
 
-def solve_output(cell, progress=None) -> SolveOutput:
+def solve_output(cell, progress=None, spool=None) -> SolveOutput:
     """Solve a typed cell (:func:`solve_cell_spec`) and build its table and metadata; Ctrl-C is
-    kept in ``interrupted`` with the samples computed so far."""
-    from gnibench.suite.cell.driver import Interrupted, integrate
-    from gnibench.suite.metrics.compute import apply
-    from gnibench.suite.runs.storage import provenance
-    from gnibench.suite.runs.tables import sample_columns
+    kept in ``interrupted`` with the samples computed so far.
 
+    ``spool``: a directory (:func:`gnibench.suite.runs.streaming.spool_directory`) where the table
+    of a :func:`~gnibench.suite.runs.streaming.streamable` cell is made block by block, in memory
+    bounded independently of the rows (``gnibench solve``); its columns are then read from the
+    directory's files while it exists. Without it, the table is held in memory (the Python API)."""
+    from gnibench.suite.cell.driver import Interrupted, integrate
+    from gnibench.suite.runs.streaming import stream_output, streamable
+
+    if spool is not None and streamable(cell):
+        traj, interrupted, table = stream_output(cell, spool, progress)
+        if table is None:                     # no row: the empty table
+            return whole_output(cell, traj, interrupted)
+        return SolveOutput(traj, *table, interrupted, cell)
     interrupted = None
     try:
         traj = integrate(cell, progress=progress)
     except Interrupted as e:                  # keep what was computed
         traj, interrupted = e.partial, e
+    return whole_output(cell, traj, interrupted)
+
+
+def whole_output(cell, traj, interrupted=None) -> SolveOutput:
+    """The table, metric outputs and metadata of a whole trajectory."""
+    from gnibench.suite.metrics.compute import apply
+    from gnibench.suite.runs.storage import provenance
+    from gnibench.suite.runs.tables import sample_columns
+
     out, skipped = apply(traj, cell.metrics, problem=cell.problem)
     return SolveOutput(traj, out, skipped, sample_columns(traj, out), provenance(traj, out),
                        interrupted, cell)

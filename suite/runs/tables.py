@@ -36,7 +36,10 @@ def frame_of(columns: dict[str, np.ndarray]) -> pd.DataFrame:
     """The DataFrame of a cell's columns (:func:`sample_columns`)."""
     import pandas as pd
 
-    return missing_steps(pd.DataFrame(columns, copy=False))   # the arrays are the cell's own
+    steps = columns.get("steps")
+    if steps is not None and np.asarray(steps).dtype.kind == "f":     # see missing_steps
+        columns = {**columns, "steps": pd.array(steps, dtype="Int64")}
+    return pd.DataFrame(columns, copy=False)          # the arrays are the cell's own
 
 
 def missing_steps(df: pd.DataFrame) -> pd.DataFrame:

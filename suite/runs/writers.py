@@ -1,7 +1,8 @@
 """The table of one cell written as csv, json or Parquet, streamed in blocks of rows.
 
 ``gnibench solve`` writes its table (:func:`gnibench.suite.runs.tables.sample_columns`: name -> 1-D
-array) through :func:`write_columns`. The text of a block of :data:`BLOCK` rows is made, written
+array, or a column spooled on disk and read by slices, :class:`gnibench.suite.runs.spool.
+SpooledColumn`) through :func:`write_columns`. The text of a block of :data:`BLOCK` rows is made, written
 and dropped before the next, so the writer's own memory does not grow with the number of rows (a
 table of 5·10^6 rows took 10.5 GB when its whole csv text was made at once); Parquet is written by
 row groups of :data:`BLOCK` rows (``pyarrow.parquet.ParquetWriter``). The text is the one pandas
@@ -53,9 +54,8 @@ def _blocks(columns: dict, block: int):
 
 
 def _csv(columns: dict, meta: dict, f, block: int) -> None:
-    plain = _plain(columns)
     for part, first in _blocks(columns, block):
-        if plain:
+        if _plain(part):                # the same text either way, the plain one faster
             f.write(_csv_text(part, header=first))
         else:
             from gnibench.suite.runs.tables import frame_of

@@ -150,3 +150,25 @@ def test_solve_stopped_by_the_output_budget_says_so_and_exits_1(monkeypatch, cap
         assert len(out.splitlines()) == 51
     else:
         assert json.loads(out)["meta"]["status"] == "max_rows"
+
+
+def test_ias15_failing_at_its_first_sample_keeps_no_sample(monkeypatch):
+    """rebound's errors end an IAS15 run as a status (``nonfinite``, rebound's error in the
+    reason): the samples kept are the samples reached, here none, as the engine's run (rows of y,
+    steps and nfev) and as the trajectory. The failure is rebound raising at its first
+    ``Simulation.integrate`` call (a collision, as with collision detection on)."""
+    import rebound
+    from gnibench.methods.engines.rebound import rebound_propagate
+    from gnibench.suite.cell.spec import parse_problem
+
+    def collide(self, *args, **kwargs):
+        raise rebound.Collision("two particles collided")
+
+    monkeypatch.setattr(rebound.Simulation, "integrate", collide)
+    run = rebound_propagate(parse_problem("kepler-2d"), np.array([0.0, 0.5, 1.0]), "ias15")
+    assert (run.status, run.reason) == ("nonfinite",
+                                        "rebound stopped: Collision: two particles collided")
+    assert run.y.shape == (0, 4) and len(run.steps) == 0 and len(run.nfev) == 0
+    r = solve("kepler-2d", "rebound-ias15:dt_out=0.5", t_end=2.0)
+    assert r.status == "nonfinite" and r.reason == run.reason
+    assert len(r.t) == 0 and r.y.shape == (0, 4) and len(r.steps) == len(r.nfev) == 0

@@ -7,7 +7,8 @@ import math
 
 import numpy as np
 import pytest
-from gnibench.problems.geodesic_genus2 import PROBLEM, SIDE_CENTRE, inside, post_step
+from gnibench.methods.engines.heyoka import heyoka_propagate
+from gnibench.problems.geodesic_genus2 import PROBLEM, R0, SIDE_CENTRE, inside, post_step
 from gnibench.suite.cell.reference import reference_solution
 from gnibench.suite.cell.solve import solve
 from gnibench.suite.cell.spec import parse_problem
@@ -101,3 +102,48 @@ def test_cli_geodesic_reference_heyoka(capsys):
     row = dict(zip(lines[0].split(","), map(float, lines[-1].split(","))))
     assert row["t"] == 5.0 and 0.0 < row["global_error"] < 1e-6          # global error of rk4
     assert row["reference_error"] < row["global_error"]         # the reference measures rk4
+
+
+def _radial_geodesic(t, k: int, H0: float) -> np.ndarray:
+    """The exact geodesic from q = 0 along e_k = (cos k pi/4, sin k pi/4), mapped into Omega.
+
+    On the diameter q = r e_k, p = pi e_k, [B] (8.2) gives r' = (1 - r^2)^2 pi / 2 with
+    pi = 2 sqrt(H0) / (1 - r^2), so r = tanh u, u = sqrt(H0) t, and pi = 2 sqrt(H0) cosh^2 u.
+    The diameter meets side k at its midpoint r_m = C - rho = (1 - R0)/(1 + R0) ([B] §8.1),
+    u_m = artanh r_m = ln(1/R0)/2; the pairing (8.3) of side k, tanh u -> tanh(u + artanh(b/a))
+    on the diameter, shifts u by artanh(b/a) = ln R0 = -2 u_m and keeps the direction (8.4): the
+    orbit re-enters at the midpoint of the opposite side. So u(t) = sqrt(H0) t folded into
+    [-u_m, u_m) with period 2 u_m."""
+    u_m = math.log(1 / R0) / 2
+    u = (math.sqrt(H0) * np.asarray(t) + u_m) % (2 * u_m) - u_m
+    e = np.array([math.cos(k * math.pi / 4), math.sin(k * math.pi / 4)])
+    r, size = np.tanh(u), 2 * math.sqrt(H0) * np.cosh(u)**2
+    return np.column_stack([r[:, None] * e, size[:, None] * e])
+
+
+@pytest.mark.parametrize("k", range(8))
+def test_heyoka_identifies_each_side_by_its_own_pairing(k):
+    """heyoka's engine (not a cached reference) along the diameter through side k: two crossings,
+    at t = u_m / sqrt(H0) and three times that, each sent by side k's pairing to the opposite
+    side; the samples are the exact mapped geodesic (:func:`_radial_geodesic`)."""
+    H0 = 0.5
+    pb = parse_problem(f"geodesic-genus2:H0={H0},angle={k * math.pi / 4!r},q10=0,q20=0")
+    t_cross = math.log(1 / R0) / 2 / math.sqrt(H0)
+    t = np.linspace(0.0, 4 * t_cross, 39)                  # no sample at a crossing
+    run = heyoka_propagate(pb, t)
+    assert run.status == "ok" and run.info["identifications"] == 2
+    np.testing.assert_allclose(run.y, _radial_geodesic(t, k, H0), rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("precision", ["double", "long double"])
+def test_heyoka_provenance_names_its_identifications_and_their_precision(precision):
+    """The engine's provenance counts the identifications and names the precision the maps ran in
+    (the working precision) for a problem with a boundary; a problem without one (kepler-2d) has
+    neither entry."""
+    t = np.linspace(0.0, 4.0, 9)
+    info = heyoka_propagate(parse_problem("geodesic-genus2"), t, precision).info
+    assert info["identification_precision"] == info["precision"] == precision
+    assert info["identifications"] == 3            # the default point crosses 3 sides by t = 4
+    plain = heyoka_propagate(parse_problem("kepler-2d"), t, precision).info
+    assert plain["precision"] == precision
+    assert "identifications" not in plain and "identification_precision" not in plain

@@ -170,6 +170,26 @@ def test_every_field_of_a_reference_changes_its_cache_file():
         assert cache_path(*args) != path, field
 
 
+def test_the_engines_code_names_the_cache_file(monkeypatch):
+    """A change of the engine's own code (a fix of methods/engines/heyoka.py or rebound.py)
+    names another cache file: a reference computed by the old code is not served to the new one
+    (a cosmic-ray mutant of the heyoka engine survived the reference tests on a warm cache)."""
+    from gnibench.suite.cell.reference import ReferenceSpec
+    from gnibench.suite.foundation import provenance
+
+    problem, t = parse_problem("kepler-2d"), np.linspace(0.0, 1.0, 5)
+    paths = {b: cache_path(problem, t, ReferenceSpec(b, "double", 1e-15)) for b in ("heyoka", "rebound")}
+    digest = provenance.code_digest
+    assert digest("gnibench.methods.engines.heyoka") != digest("gnibench.methods.engines.rebound")
+    for backend, path in paths.items():
+        changed = f"gnibench.methods.engines.{backend}"
+        monkeypatch.setattr(provenance, "code_digest",
+                            lambda *mods, c=changed: digest(*mods) + ("x" if c in mods else ""))
+        assert cache_path(problem, t, ReferenceSpec(backend, "double", 1e-15)) != path, backend
+        monkeypatch.setattr(provenance, "code_digest", digest)
+        assert cache_path(problem, t, ReferenceSpec(backend, "double", 1e-15)) == path
+
+
 def test_long_double_full_output(tmp_path, monkeypatch):
     monkeypatch.setenv("GNIBENCH_CACHE_DIR", str(tmp_path))
     problem = parse_problem("kepler-2d")

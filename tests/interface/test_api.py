@@ -206,6 +206,19 @@ def test_run_and_report(tmp_path):
         gnibench.run(42)
 
 
+def test_run_result_repr_says_what_it_holds_and_where(tmp_path):
+    """A RunResult's repr names its experiment, its numbers of cells and samples as they are, and
+    where its tables are: the results directory, or "in memory" without one."""
+    spec = {"name": "api-repr", "title": "t", "reference": "none", "t_end": 0.5,
+            "cells": [{"problems": ["pendulum"], "methods": ["rk4:h=0.1", "rk4:h=0.05"]}]}
+    mem = gnibench.run(spec, jobs=1)
+    assert (len(mem.cells), len(mem.samples)) == (2, 6 + 11)
+    assert repr(mem) == "RunResult('api-repr': 2 cells, 17 samples, in memory)"
+    out = tmp_path / "out"
+    res = gnibench.run(spec, output=out, jobs=1)
+    assert repr(res) == f"RunResult('api-repr': 2 cells, 17 samples, {out})"
+
+
 def test_verify_is_the_cli(tmp_path, capsys):
     ledger = gnibench.verify(["B-2-b"], scale="quick", output=tmp_path / "api")
     assert main(["verify", "B-2-b", "--format", "json", "-o", str(tmp_path / "cli"),

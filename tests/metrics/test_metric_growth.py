@@ -155,3 +155,22 @@ def test_each_decade_weighs_the_same_for_a_broken_power_law():
     t = np.linspace(0.0, 100.0, 100_001)
     env = np.where(t <= 10, t, 10 * (t / 10) ** 3)
     assert abs(growth_exponent(t, env, 1.0, 100.0) - 2.0) < 0.05
+
+
+def test_the_fit_window_is_closed_and_reads_nothing_outside_it():
+    """The exponent over [t_lo, t_hi] reads exactly the samples with t_lo <= t <= t_hi, both ends
+    included (the module's docstring): with env = 2 t^3 sampled at t = 0.5, 1, ..., 200 and the
+    window [1, 100] (both sample times), the slope is 3; whatever lies before t_lo or after t_hi
+    (here +inf, an error that diverged there) changes nothing, and +inf at either end sample is a
+    divergence in the window."""
+    t = np.concatenate([[0.0, 0.5], np.geomspace(1.0, 100.0, 41), [150.0, 200.0]])
+    env = 2.0 * t**3
+    lo, hi = 1.0, 100.0
+    assert abs(growth_exponent(t, env, lo, hi) - 3.0) < 1e-12
+    outside = env.copy()
+    outside[(t > 0) & (t < lo)] = math.inf
+    outside[t > hi] = math.inf
+    assert abs(growth_exponent(t, outside, lo, hi) - 3.0) < 1e-12
+    for end in (lo, hi):
+        at_end = np.where(t == end, math.inf, env)
+        assert growth_fit(t, at_end, lo, hi) == (math.inf, ""), end

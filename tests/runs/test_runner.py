@@ -224,3 +224,35 @@ def test_tables_of_many_experiments_are_rewritten_within_one_shared_budget():
     for w in writers[1:]:                               # all 41 together: 16 FLUSH_SECONDS
         costs[id(w)] = costs[id(writers[0])]
     assert not writers[0].due() and not writers[1].due()
+
+
+# kepler-2d's period is 2 pi ([HLW] (2.11): a = 1); pendulum has none and no Runge-Lenz vector
+NOTES = """
+name = "notes"
+title = "Metrics that do not apply"
+reference = "none"
+t_end = 12.566370614359172
+every = 100
+metrics = ["eta", "precession"]
+
+[[cells]]
+problems = ["kepler-2d", "pendulum"]
+methods = ["stormer-verlet:h=0.06283185307179587"]
+"""
+
+
+def test_metric_notes_name_each_chosen_metric_that_did_not_apply(tmp_path):
+    """cells.parquet's ``metric_notes`` (suite/runs/experiment.py): for each chosen metric that
+    does not apply to a cell, "metric: why", in the order chosen, joined by "; "; empty where
+    every chosen metric applied (and was computed)."""
+    path = tmp_path / "notes.toml"
+    path.write_text(NOTES)
+    out = tmp_path / "out"
+    assert main(["run", str(path), "-o", str(out), "--no-report"]) == 0
+    cells = pd.read_parquet(out / "cells.parquet").set_index("problem")
+    assert cells.loc["kepler-2d:e=0.6", "metric_notes"] == ""
+    assert cells.loc["kepler-2d:e=0.6", "eta_periods"] == 2
+    assert cells.loc["pendulum", "metric_notes"] == (
+        "eta: pendulum has no period; precession: pendulum has no Runge-Lenz (A1, A2) or Laplace "
+        "(e1..e3 with c1..c3) vector among its integrals")
+    assert pd.isna(cells.loc["pendulum", "eta_periods"])

@@ -139,6 +139,58 @@ def mutation_section(repo: Path) -> str:
             + table(["mutant", "outcome", "killed by", "the bug"], rows))
 
 
+def _value(v) -> str:
+    if isinstance(v, float):
+        return f"{v:.3g}"
+    return "–" if v is None else str(v)
+
+
+def _met(value, goal) -> str:
+    op, target = goal[0], float(goal[1])
+    if not isinstance(value, (int, float)) or isinstance(value, bool):
+        return "not measured"
+    ok = value >= target if op == ">=" else value <= target
+    return f"{value:.3g} ({'met' if ok else 'not met'}: goal {op} {target:g})"
+
+
+def script_sections(repo: Path) -> list[str]:
+    """The newest saved result of each benchmark script (``benchmarks/results/<script>-*.json``,
+    written by the script's ``--json``, :func:`gnibench.suite.foundation.benchmarks.script_result`):
+    its rows, each goal read against them, where, when and under which load."""
+    import json
+
+    newest: dict[str, tuple[str, Path, dict]] = {}
+    for f in sorted((repo / "benchmarks" / "results").glob("*.json")):
+        try:
+            doc = json.loads(f.read_text(encoding="utf-8"))
+        except (ValueError, OSError):
+            continue
+        if not isinstance(doc, dict) or "script" not in doc or "rows" not in doc:
+            continue
+        key = str(doc["script"])
+        if key not in newest or str(doc.get("date", "")) >= newest[key][0]:
+            newest[key] = (str(doc.get("date", "")), f, doc)
+    out = []
+    for script, (date, f, doc) in sorted(newest.items()):
+        commit, machine, load = doc.get("commit") or {}, doc.get("machine") or {}, doc.get("load") or {}
+        rows = doc["rows"]
+        goals = doc.get("goals") or {}
+        cols = [k for k in dict.fromkeys(k for r in rows for k in r) if k not in goals]
+        body = [[cell(_value(r.get(k))) for k in cols] + [cell(_met(r.get(g), goals[g])) for g in goals]
+                for r in rows]
+        loads = ", ".join(f"{k} {v:.1f}" for k, v in load.items() if isinstance(v, (int, float)))
+        out.append(
+            f"## {code(script)}: {date[:19]}\n\n"
+            f"`python benchmarks/{script}`, file {code(f.relative_to(repo))}; measured on "
+            f"{cell(str(machine.get('node', '?')))} ({machine.get('cpus', '?')} CPUs, "
+            f"{cell(str(machine.get('processor', '')))}) at commit {code(str(commit.get('id', ''))[:10])}"
+            + (" (uncommitted changes)" if commit.get("dirty") else "")
+            + (f", load average (1 min) {loads}" if loads else "") + ". "
+            + " ".join(f"{code(g)}: {cell(goals[g][2])}." for g in goals if len(goals[g]) > 2)
+            + "\n\n" + table(cols + list(goals), body))
+    return out
+
+
 def page(repo: Path) -> str:
     out = [INTRO]
     found = False
@@ -150,6 +202,7 @@ def page(repo: Path) -> str:
         out.append("No saved benchmark run was found when this page was built. Run "
                    "`pytest benchmarks --benchmark-only` and `gnibench bench` in the repository, "
                    "then build the documentation again.\n")
+    out += script_sections(repo)
     out.append(mutation_section(repo))
     return "\n".join(out)
 

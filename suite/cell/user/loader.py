@@ -5,7 +5,8 @@
   checked first, then registered together; nothing is registered when one fails.
 * :func:`discover` loads, once per process, the files of ``GNIBENCH_LOAD`` (paths separated by
   ``:``, empty entries skipped: :func:`load_paths`) and the entry points of the groups
-  ``gnibench.problems`` and ``gnibench.methods``. An entry point names a definition table (a
+  ``gnibench.problems`` and ``gnibench.methods`` (a broken entry point is a warning and is
+  skipped; a bad ``GNIBENCH_LOAD`` file is an error). An entry point names a definition table (a
   dict with the keys of a file's entry; ``id`` defaults to the entry point's name), a list of
   them, or a function returning either.
 
@@ -20,6 +21,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import time
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
@@ -54,6 +56,12 @@ class Origin:
 
 #: origin name -> (digest of its text, [(kind, id)])
 _LOADED: dict[str, tuple[str, list[tuple[str, str]]]] = {}
+#: per loaded file, its stat and digest when its text was last found unchanged (refresh)
+_CHECKED: dict[str, tuple] = {}
+#: a file modified less than this long ago (ns) is read again even when its stat is unchanged:
+#: two writes within one tick of the file system's clock, of the same size, have the same stat
+#: (git's "racy" entries)
+RACY_NS = 2_000_000_000
 _discovered = False
 
 
@@ -83,10 +91,23 @@ def discover() -> None:
 
         for group in GROUPS:
             for ep in entry_points(group=group):
-                _load_entry_point(group, ep.name)
+                _load_installed(group, ep.name)
     except BaseException:
         _discovered = False             # the next call tries again (and says so again)
         raise
+
+
+def _load_installed(group: str, name: str) -> None:
+    """An installed entry point, found by :func:`discover`: a broken one (it fails to import,
+    raises, gives the wrong type, a bad or colliding id) is one warning line naming it and what
+    is allowed, and its definitions are skipped; the shipped ones and those of the other
+    packages stay usable (a broken plugin made every solve, list and run exit with code 2)."""
+    from gnibench.suite.foundation.cache import warn
+
+    try:
+        _load_entry_point(group, name)
+    except UserError as e:
+        warn(f"{e}; its definitions are skipped (fix or uninstall its package)")
 
 
 def _short(value) -> str:
@@ -127,10 +148,21 @@ def refresh() -> None:
     ``solve`` and ``run``: a notebook sees its edited definitions, as a new command would)."""
     for name in [n for n, (digest, _) in _LOADED.items() if digest]:
         try:
-            text = Path(name).read_text(encoding="utf-8")
-        except (OSError, UnicodeDecodeError):
-            continue                                 # gone or unreadable: keep what was loaded
-        if hashlib.sha256(text.encode()).hexdigest() != _LOADED[name][0] or _stale(name):
+            st = os.stat(name)
+        except OSError:
+            continue                                 # gone: keep what was loaded
+        seen = (st.st_mtime_ns, st.st_ctime_ns, st.st_size, st.st_ino, _LOADED[name][0])
+        if _CHECKED.get(name) != seen:               # the file may have changed: read it
+            try:
+                text = Path(name).read_text(encoding="utf-8")
+            except (OSError, UnicodeDecodeError):
+                continue                             # unreadable: keep what was loaded
+            if hashlib.sha256(text.encode()).hexdigest() != _LOADED[name][0]:
+                load(name)
+                continue
+            if time.time_ns() - st.st_mtime_ns > RACY_NS:   # an older stat can be trusted
+                _CHECKED[name] = seen
+        if _stale(name):
             load(name)
 
 
