@@ -54,9 +54,14 @@ def pick_cells(cells) -> tuple[list[int], str]:
     ids = [int(c) for c in cells["cell"]]
     if len(ids) <= MAX_CURVES:
         return ids, ""
+    from gnibench.reports.setups import positions
+
     picked = []
-    for _, part in cells.groupby("setup", sort=False):
-        part = part.sort_values("nfev", na_position="last", kind="stable")
+    for rows in positions(cells["setup"]).values():
+        if len(rows) == 1:
+            picked.append(ids[rows[0]])
+            continue
+        part = cells.iloc[rows].sort_values("nfev", na_position="last", kind="stable")
         picked.append(int(part["cell"].iloc[(len(part) - 1) // 2]))
     note = (f"{len(ids)} cells: one per family is drawn (the middle of its sweep by nfev; "
             f"[report] cells and family choose others); the work-precision diagrams and the table "
@@ -134,9 +139,15 @@ def trajectories(samples) -> dict[int, object]:
 
 def shades(cells) -> dict[int, float]:
     """Opacity per cell: the cells of one family from 0.45 (coarsest h or loosest tolerance) to 1."""
+    from gnibench.reports.setups import positions
+
+    ids = cells["cell"].to_numpy()
     out = {}
-    for _, part in cells.groupby("setup", sort=False):
-        part = part.sort_values("sweep_value", ascending=False, kind="stable")
+    for rows in positions(cells["setup"]).values():
+        if len(rows) == 1:
+            out[int(ids[rows[0]])] = 1.0
+            continue
+        part = cells.iloc[rows].sort_values("sweep_value", ascending=False, kind="stable")
         n = len(part)
         for k, cid in enumerate(part["cell"]):
             out[int(cid)] = 1.0 if n == 1 else 0.45 + 0.55 * k / (n - 1)

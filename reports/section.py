@@ -9,7 +9,7 @@ from pathlib import Path
 
 from gnibench.reports import ensembles, interactive, plots, workprecision
 from gnibench.reports.palette import Palette, styles
-from gnibench.reports.setups import contexts, family_names
+from gnibench.reports.setups import context_rows, family_names
 
 
 def repeats_words(stats: dict, ids) -> str:
@@ -20,6 +20,13 @@ def repeats_words(stats: dict, ids) -> str:
     what = f"{runs[0]}" if len(runs) == 1 else f"{runs[0]} to {runs[-1]}"
     return (f"the fastest of {what} runs per cell (median and spread in the table of cells and on "
             f"hover)")
+
+
+def swept_contexts(cells) -> set[str]:
+    """The contexts (column ``context``) in which some family has two or more cells, in one pass
+    (:func:`gnibench.reports.workprecision.has_sweeps` of each context's cells)."""
+    sizes = cells.groupby(["context", "setup"], sort=False).size()
+    return {c for (c, _), n in sizes.items() if n >= 2}
 
 
 def problem_section(problem: str, part, samples, img_dir: Path, prefix: str, slug: str, jobs,
@@ -43,10 +50,14 @@ def problem_section(problem: str, part, samples, img_dir: Path, prefix: str, slu
         if samples is not None and len(samples) else []
     words = repeats_words(stats, [int(c) for c in part["cell"]])
     out_contexts = []
-    for k, (name, ctx) in enumerate(contexts(part)):
+    curves = swept_contexts(part)
+    for k, (key, name, rows) in enumerate(context_rows(part)):
+        if key not in curves:          # no family with two cells: no diagram, no league table
+            continue
+        ctx = part.iloc[rows]
         cnames = family_names(ctx)
         wp, live = [], None
-        if "work-precision" in kinds and workprecision.has_sweeps(ctx):
+        if "work-precision" in kinds:
             cprefix = prefix if k == 0 else f"{prefix}-{k}"
             wp = workprecision.wp_figures(problem, ctx, {c: w * 1e3 for c, w in wall.items()},
                                           img_dir, cprefix, slug, jobs, style, cnames, options,

@@ -130,25 +130,53 @@ def family_names(cells) -> dict[int, str]:
     return names
 
 
+def positions(values) -> dict:
+    """The rows of each value of ``values`` (a column without missing values): {value: row
+    positions, ascending}, the values in order of their first row. One pass over the table: a
+    report selects the cells of each family or context from it instead of comparing the whole
+    column once per family (a cost quadratic in the number of families)."""
+    import numpy as np
+    import pandas as pd
+
+    codes, uniques = pd.factorize(np.asarray(values), sort=False)
+    order = np.argsort(codes, kind="stable")
+    ends = np.cumsum(np.bincount(codes, minlength=len(uniques)))
+    return dict(zip(uniques.tolist(), np.split(order, ends[:-1])))
+
+
+def context_names(keys: list[str]) -> list[str]:
+    """The name of each context (:func:`add_setups` column ``context``) of a page section: what
+    sets it apart from the others ("" when there is one): its horizon, its reference, its
+    problem."""
+    if len(keys) == 1:
+        return [""]
+    parts = [c.split("\x1f") for c in keys]
+    differ = [len({p[i] for p in parts}) > 1 for i in range(3)]   # problem, horizon, reference
+    out = []
+    for problem, horizon, reference in parts:
+        words = []
+        if differ[0]:
+            words.append(problem)
+        if differ[1]:
+            words.append(f"T = {float(horizon):.6g}")
+        if differ[2]:
+            words.append(f"against {reference or 'the exact solution'}")
+        out.append("; ".join(words))
+    return out
+
+
+def context_rows(cells) -> list[tuple[str, str, object]]:
+    """The contexts of a page section's cells, in order of their first cell: (key, name, row
+    positions), named by :func:`context_names`."""
+    rows = positions(cells["context"])
+    return list(zip(rows, context_names(list(rows)), rows.values()))
+
+
 def contexts(cells) -> list[tuple[str, object]]:
     """The contexts of a page section's cells, in order of their first cell: (name, cells). The
     name says what sets the context apart from the others of the section ("" when there is one):
     its horizon, its reference, its problem."""
-    groups = [(c, cells[cells["context"] == c]) for c in dict.fromkeys(cells["context"])]
-    if len(groups) == 1:
-        return [("", groups[0][1])]
-    parts = [c.split("\x1f") for c, _ in groups]
-    out = []
-    for (c, part), (problem, horizon, reference) in zip(groups, parts):
-        words = []
-        if len({p[0] for p in parts}) > 1:
-            words.append(problem)
-        if len({p[1] for p in parts}) > 1:
-            words.append(f"T = {float(horizon):.6g}")
-        if len({p[2] for p in parts}) > 1:
-            words.append(f"against {reference or 'the exact solution'}")
-        out.append(("; ".join(words), part))
-    return out
+    return [(name, cells.iloc[rows]) for _, name, rows in context_rows(cells)]
 
 
 def point_label(name: str, swept: str) -> str:
