@@ -64,13 +64,23 @@ def _killer(row: dict) -> str:
     return ", ".join(found)
 
 
+def blind_spots() -> dict[str, str]:
+    """Why each known survivor of the shipped catalog survives (its entries' ``blind_spot``)."""
+    from gnibench.suite.ledger.mutants import load_catalog
+
+    return {m.id: m.blind_spot for m in load_catalog()[0] if m.blind_spot}
+
+
 def mutant_table(doc: dict) -> str:
-    """One row per mutant: id, file, what the bug does, and what killed it (or why it survived)."""
+    """One row per mutant: id, file, what the bug does, and what killed it (or why it survived:
+    the campaign's record of the catalog entry's ``blind_spot``, else the catalog's now)."""
     lines = ["| mutant | file | the bug | killed by |", "|---|---|---|---|"]
+    known = blind_spots()
     for row in doc["mutants"]:
+        why = row.get("blind_spot") or known.get(row["id"], "")
         verdict = _killer(row) if row["killed"] else \
             f"inconclusive: {row['inconclusive']}" if row.get("inconclusive") else \
-            "**survived**" + (f": {row['blind_spot']}" if row.get("blind_spot") else "")
+            "**survived**" + (f": {why}" if why else "")
         lines.append(f"| {row['id']} | `{row['file']}` | {_cell(row['description'])} | "
                      f"{_cell(verdict)} |")
     return "\n".join(lines)

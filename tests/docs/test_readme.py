@@ -1,6 +1,8 @@
 """The README is one screen that points to the documentation: at most 150 lines, the two
 commands exactly, no measurement log (dates, timings, "on that machine"), and its tour's
-commands run; no file of the repository refers to files outside it."""
+commands run; no file of the repository refers to files outside it. The one result it reports,
+the score of the last full mutation campaign (issue 41), is checked against the saved campaign,
+so it cannot go stale."""
 from __future__ import annotations
 
 import os
@@ -14,6 +16,8 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 README = (ROOT / "README.md").read_text(encoding="utf-8")
+#: the README's section that reports the last full mutation campaign (checked against its file)
+CAMPAIGN = README.split("## How far the checks go", 1)[1].split("\n## ", 1)[0]
 RUN = ("python3 -m venv .venv && .venv/bin/pip install -e . && .venv/bin/gnibench run quick")
 TEST = ("python3 -m venv .venv && .venv/bin/pip install -e '.[test]' && "
         ".venv/bin/python -m pytest -q -n auto")
@@ -34,8 +38,28 @@ def test_readme_is_one_screen_with_the_two_commands():
     r"(?i)load average",
 ])
 def test_readme_holds_no_measurement_log(pattern):
-    hits = [line for line in README.splitlines() if re.search(pattern, line)]
+    text = README.replace(CAMPAIGN, "")
+    hits = [line for line in text.splitlines() if re.search(pattern, line)]
     assert hits == [], f"measurement prose in the README: {hits}"
+
+
+def test_readme_reports_the_last_full_campaign_as_saved():
+    """Score, date, commit and every survivor of the newest saved whole-catalog campaign
+    (benchmarks/mutants-<date>.json, what the documentation's page shows), and nothing else
+    dated in that section."""
+    import json
+
+    doc = json.loads(sorted((ROOT / "benchmarks").glob("mutants-20*.json"))[-1].read_text())
+    text = " ".join(CAMPAIGN.split())
+    assert f"killed {doc['killed']} of {doc['total']} mutants" in text
+    assert f"({doc['date']}, commit {doc['commit'][:7]}" in text
+    for row in doc["mutants"]:
+        assert (f"`{row['id']}`" in text) == (not row["killed"]), row["id"]
+    assert re.findall(r"\b20\d\d-\d\d-\d\d\b", text) == [doc["date"]]
+    held = [json.loads(sorted((ROOT / "benchmarks").glob(f"mutants-heldout-{k}-new-*.json"))[-1]
+                       .read_text()) for k in (1, 2)]
+    assert f"scored {held[0]['killed']} of {held[0]['total']} and {held[1]['killed']} of " \
+           f"{held[1]['total']}" in text
 
 
 def _tour() -> list[str]:

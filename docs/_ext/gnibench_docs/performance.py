@@ -123,11 +123,16 @@ def mutation_section(repo: Path) -> str:
         return ""
     date, path = max(docs)
     doc = json.loads(path.read_text(encoding="utf-8"))
+    from gnibench.reports.mutation import blind_spots
+
+    known = blind_spots()
     rows = []
     for m in doc.get("mutants", []):
         by = ", ".join(m.get("claims") or []) or ", ".join(m.get("tests") or []) or m.get("crash", "")
-        rows.append([code(m.get("id")), cell("killed" if m.get("killed") else "survived"),
-                     cell(by or m.get("blind_spot", "")), cell(m.get("description", ""))])
+        outcome = "killed" if m.get("killed") else "inconclusive" if m.get("inconclusive") else "survived"
+        why = "" if m.get("killed") else m.get("blind_spot") or known.get(m.get("id"), "")
+        rows.append([code(m.get("id")), cell(outcome), cell(by or why or m.get("inconclusive", "")),
+                     cell(m.get("description", ""))])
     base = doc.get("baseline") or {}
     return (f"## The last saved mutation campaign: {date}\n\n"
             f"`gnibench verify --mutants` at the {doc.get('scale', '?')} scale, file "
