@@ -181,8 +181,10 @@ def script_sections(repo: Path) -> list[str]:
         rows = doc["rows"]
         goals = doc.get("goals") or {}
         cols = [k for k in dict.fromkeys(k for r in rows for k in r) if k not in goals]
-        body = [[cell(_value(r.get(k))) for k in cols] + [cell(_met(r.get(g), goals[g])) for g in goals]
-                for r in rows]
+        # the first column (what the row is), then each goal read, then the other measures
+        body = [[cell(_value(r.get(k))) for k in cols[:1]]
+                + [cell(_met(r.get(g), goals[g])) for g in goals]
+                + [cell(_value(r.get(k))) for k in cols[1:]] for r in rows]
         loads = ", ".join(f"{k} {v:.1f}" for k, v in load.items() if isinstance(v, (int, float)))
         out.append(
             f"## {code(script)}: {date[:19]}\n\n"
@@ -192,7 +194,7 @@ def script_sections(repo: Path) -> list[str]:
             + (" (uncommitted changes)" if commit.get("dirty") else "")
             + (f", load average (1 min) {loads}" if loads else "") + ". "
             + " ".join(f"{code(g)}: {cell(goals[g][2])}." for g in goals if len(goals[g]) > 2)
-            + "\n\n" + table(cols + list(goals), body))
+            + "\n\n" + table(cols[:1] + list(goals) + cols[1:], body))
     return out
 
 
