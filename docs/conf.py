@@ -67,6 +67,7 @@ nb_execution_raise_on_error = True              # a failed cell fails the build
 nb_execution_show_tb = True
 nb_execution_timeout = 900
 nb_execution_in_temp = True                     # the notebooks write into a temporary folder
+nb_render_markdown_format = "myst"             # Markdown outputs with tables (commonmark has none)
 nb_merge_streams = True                         # one output block per stream and cell
 nb_output_stderr = "remove"                     # progress lines (stderr) are not shown; a failure
                                                 # still fails the build
