@@ -8,6 +8,7 @@ resumable, shared with :func:`gnibench.reproduce`); the verdicts are judged from
 from __future__ import annotations
 
 import contextlib
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -79,7 +80,8 @@ def _judge(claims, dirs: dict[str, Path], out: Path, scale: str) -> Ledger:
 
     verdicts = judge(claims, Results(dirs), scale)
     meta = {"scale": scale, "versions": versions(),
-            "experiments": {k: str(v) for k, v in dirs.items()}}
+            # relative to the ledger: the same ledger bytes whatever directory it was written to
+            "experiments": {k: os.path.relpath(v, out) for k, v in dirs.items()}}
     write_ledger(verdicts, out, meta)
     text = render_ledger(ledger_table(verdicts), meta)
     atomic_write(out / "ledger.md", lambda p: Path(p).write_text(text, encoding="utf-8"))

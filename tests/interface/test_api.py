@@ -228,6 +228,15 @@ def test_verify_is_the_cli(tmp_path, capsys):
     assert ledger["verdict"].tolist() == [r["verdict"] for r in rows]
 
 
+def test_a_ledger_is_the_same_bytes_whatever_directory_holds_it(tmp_path):
+    """ledger.parquet named its experiments' results by absolute path: two runs of the same
+    claims into two directories differed (B-3-a needs an experiment)."""
+    for d in ("a", "b"):
+        gnibench.verify(["B-3-a"], scale="quick", output=tmp_path / d)
+    assert (tmp_path / "a" / "ledger.parquet").read_bytes() == \
+        (tmp_path / "b" / "ledger.parquet").read_bytes()
+
+
 def test_docs_python_examples_run(capsys, tmp_path, monkeypatch):
     """The Python blocks of the documentation's how-to pages that are not executed notebooks
     (the notebooks run when the documentation builds), run as they are, so they stay true (in a
