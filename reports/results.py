@@ -136,7 +136,10 @@ def _ours(table, path: Path, columns):
 def load_results(path: Path) -> Results:
     """Read one results directory (see the module docstring)."""
 
+    from gnibench.suite.runs.storage import check_table_set
+
     path = Path(path)
+    check_table_set(path)
     meta = parquet_meta(path / "cells.parquet")
     cells = _ours(read_table(path / "cells.parquet"), path / "cells.parquet", CELL_COLUMNS)
     timings = _ours(read_table(path / "timings.parquet"), path / "timings.parquet",

@@ -109,8 +109,9 @@ class RunResult:
 
 def read_tables(out: Path, output: Path | None) -> RunResult:
     """A results directory's tables (``samples``, ``cells``, ``timings``.parquet) in memory."""
-    from gnibench.suite.runs.storage import read_parquet, read_parquet_meta
+    from gnibench.suite.runs.storage import check_table_set, read_parquet, read_parquet_meta
 
+    check_table_set(out)
     tables = {name: read_parquet(out / f"{name}.parquet")
               for name in ("samples", "cells", "timings")}
     for name, file in (("ensemble", "ensemble"), ("ensemble_stats", "ensemble_stats")):

@@ -67,3 +67,39 @@ def read_parquet_meta(path) -> dict:
     else:
         md = pq.read_schema(path).metadata or {}
     return json.loads(md.get(b"gnibench", b"{}"))
+
+
+#: the tables one write of the runner makes together (runner.py ``flush``), and the keys of their
+#: gnibench metadata that differ between them
+TABLE_SET = ("samples", "cells", "timings")
+PER_TABLE = ("table", "written_at")
+
+
+def check_table_set(out: Path) -> None:
+    """Refuse, in one line, the tables of a results directory that come from two writes of the
+    runner (a run killed between writing two of them leaves, say, samples.parquet of its last
+    write beside cells.parquet of the one before): their metadata, but for each table's name and
+    time, is the same when they belong together (the cells done, the experiment's text, the
+    versions)."""
+    from gnibench.suite.foundation.errors import UserError
+
+    metas = {}
+    for name in TABLE_SET:
+        path = Path(out) / f"{name}.parquet"
+        try:
+            meta = read_parquet_meta(path)
+        except UserError:
+            raise
+        except Exception as e:  # noqa: BLE001 - pyarrow raises many kinds; all mean the same
+            why = " ".join(str(e).split())[:160] or type(e).__name__
+            raise UserError(f"cannot read {path} ({why}); it is damaged or not a gnibench "
+                            f"table: run the command that wrote it again") from None
+        metas[name] = {k: v for k, v in meta.items() if k not in PER_TABLE}
+    first, ref = next(iter(metas.items()))
+    for name, meta in metas.items():
+        if meta != ref:
+            what = ", ".join(f"{n}.parquet {m.get('cells_done', '?')} of {m.get('cells_total', '?')}"
+                             for n, m in metas.items())
+            raise UserError(f"the tables of {out} come from two writes of a run (cells done: "
+                            f"{what}); it was stopped while writing them: run the command that "
+                            f"wrote them again")

@@ -294,3 +294,33 @@ def test_plain_progress_lines_when_not_a_terminal(tmp_path):
     done = [ln for ln in lines if re.match(r"\[\d+/8\] \d+ s: cell \d+: ", ln)]
     assert len(done) == 8            # one per finished cell ("running: ..." lines come with time)
     assert "\r" not in run.stderr
+
+
+def test_tables_of_two_writes_are_refused_in_one_line(tmp_path, capsys):
+    """A run killed between writing samples.parquet and cells.parquet leaves tables of two of its
+    writes side by side; the report and the API refuse them in one line instead of reading the
+    mix (here cells.parquet is made as the write before would have made it: one cell fewer)."""
+    import json
+
+    import gnibench
+    import pyarrow.parquet as pq
+
+    out = tmp_path / "out"
+    assert main(["run", str(_write(tmp_path, TINY, "tiny")), "-o", str(out), "-j", "1",
+                 "--no-report"]) == 0
+    gnibench.report([out], output=tmp_path / "site")                 # one write: read as usual
+    table = pq.read_table(out / "cells.parquet")
+    meta = json.loads(table.schema.metadata[b"gnibench"])
+    meta["cells_done"] -= 1
+    pq.write_table(table.replace_schema_metadata({**table.schema.metadata,
+                                                  b"gnibench": json.dumps(meta).encode()}),
+                   out / "cells.parquet")
+    capsys.readouterr()
+    assert main(["report", str(out), "-o", str(tmp_path / "site2")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "come from two writes" in err[0] and "Traceback" not in err[0]
+    assert not (tmp_path / "site2").exists()
+    from gnibench.suite.api.running import read_tables
+
+    with pytest.raises(gnibench.UserError, match="come from two writes"):
+        read_tables(out, out)
