@@ -21,7 +21,7 @@ _received: list[int] = []
 
 def _early(signum, frame):
     _received.append(signum)
-    signal_received()
+    signal_received(signum)
     signals = sys.modules.get("gnibench.suite.cli.signals")   # loaded: the command's handling
     if signals is not None:                                   # ended, and its end reports this
         signals.note(signum)

@@ -104,7 +104,7 @@ def _unsafe(frame) -> bool:
 
 
 def _handler(signum, frame):
-    signal_received()                   # a real interrupt, not one the user's code raised
+    signal_received(signum)             # a real interrupt, not one the user's code raised
     now = time.monotonic()
     with _state.lock:
         _state.received = signum

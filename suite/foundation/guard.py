@@ -32,11 +32,20 @@ class UserCodeError(Exception):
 
 _signals = [0]                  # real SIGINT/SIGTERM received by gnibench's handlers so far
 _watched = [False]              # are gnibench's handlers installed in this process?
+_last: list[int | None] = [None]   # the last of them (its number)
 
 
-def signal_received() -> None:
+def signal_received(signum: int | None = None) -> None:
     """Called by gnibench's signal handlers for each SIGINT or SIGTERM they receive."""
     _signals[0] += 1
+    if signum is not None:
+        _last[0] = signum
+
+
+def stopped_by() -> str:
+    """How the last signal gnibench's handlers received stopped the work, in the words of the
+    command's last line: "terminated" (SIGTERM) or "interrupted" (SIGINT, or none counted)."""
+    return "terminated" if _last[0] == signal.SIGTERM else "interrupted"
 
 
 def watch_signals(on: bool = True) -> None:
@@ -87,7 +96,7 @@ def user_code(what):
 
 def _interrupt(signum, frame):
     """Python's SIGINT handler, counting the signal first (:func:`user_code` in the API)."""
-    signal_received()
+    signal_received(signum)
     signal.default_int_handler(signum, frame)
 
 

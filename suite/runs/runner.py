@@ -51,6 +51,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from gnibench.suite.foundation.cache import atomic_write
+from gnibench.suite.foundation.guard import stopped_by
 from gnibench.suite.foundation.outputs import Fault, fault
 from gnibench.suite.foundation.provenance import versions
 from gnibench.suite.foundation.status import Status
@@ -183,7 +184,7 @@ def run_experiments(experiments: list[Experiment], outs: list[Path], store_root:
                 for w in writers:
                     w.flush(done)
             rest = "to compute the rest" if len(done) < len(unique) else "to finish"
-            print(f"gnibench: interrupted: {len(done)} of {len(unique)} cells are stored in "
+            print(f"gnibench: {stopped_by()}: {len(done)} of {len(unique)} cells are stored in "
                   f"{store_root}; {again} {rest}", file=log, flush=True)
             raise
         except Fault:                 # a worker died: what is stored stays, the rest pending

@@ -165,6 +165,9 @@ def test_sigterm_of_a_pool_run_stops_its_workers_and_keeps_the_stored_cells(tmp_
     proc.send_signal(signal.SIGCONT)
     code, err = ended(proc)
     assert code == 143 and err[-1] == "gnibench: terminated"
+    # the runner's line names the signal too (it said "interrupted:" after a SIGTERM)
+    assert any(line.startswith("gnibench: terminated: ") for line in err), err
+    assert not any(line.startswith("gnibench: interrupted") for line in err), err
     wait_for(lambda: all(_gone(w) for w in workers), "end of the workers")
     stored = stored_cells(out)
     again = subprocess.run([GNIBENCH, "run", str(exp), "-o", str(out), "-j", "2", "--no-report"],
