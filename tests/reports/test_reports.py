@@ -340,12 +340,13 @@ def test_the_index_badge_tells_complete_failures_and_incomplete(tmp_path):
     index = (tmp_path / "s1" / "index.html").read_text()
     assert '<span class="badge partial">complete, with failures: 1 max_steps, 1 ok</span>' in index
     shutil.copytree(tmp_path / "a", tmp_path / "b")
-    table = pq.read_table(tmp_path / "b" / "cells.parquet")
-    meta = json.loads(table.schema.metadata[b"gnibench"])
-    meta.update(complete=False, cells_done=1, cells_total=2)
-    pq.write_table(table.replace_schema_metadata(
-        {**table.schema.metadata, b"gnibench": json.dumps(meta).encode()}),
-        tmp_path / "b" / "cells.parquet")
+    for name in ("samples", "cells", "timings"):       # the three tables of one write agree
+        table = pq.read_table(tmp_path / "b" / f"{name}.parquet")
+        meta = json.loads(table.schema.metadata[b"gnibench"])
+        meta.update(complete=False, cells_done=1, cells_total=2)
+        pq.write_table(table.replace_schema_metadata(
+            {**table.schema.metadata, b"gnibench": json.dumps(meta).encode()}),
+            tmp_path / "b" / f"{name}.parquet")
     build_site([tmp_path / "b"], tmp_path / "s2")
     index = (tmp_path / "s2" / "index.html").read_text()
     assert '<span class="badge warn">incomplete: 1 of 2 cells done</span>' in index
